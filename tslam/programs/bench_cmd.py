@@ -1,0 +1,40 @@
+"""``tslam bench sim``: simulator throughput and memory, printed as one JSON object."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import sys
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("bench", help="benchmarks that print figures")
+    bsub = p.add_subparsers(dest="bench_command", required=True, metavar="WHAT")
+    sim = bsub.add_parser("sim", help="sonar ring scans per second, simulator speed, memory")
+    sim.add_argument("--json", action="store_true", help="print one JSON object (default)")
+    sim.add_argument("--office-seed", type=int, default=1, help="seed of the 50 x 50 m office")
+    sim.set_defaults(run=_bench_sim)
+
+
+def _bench_sim(args: argparse.Namespace) -> int:
+    from sim_backend.bench import ring_scans_per_s, sim_realtime_factor
+    from sim_backend.world_files import load_world
+
+    worlds = {"fig14": "fig14", "office": f"office:{args.office_seed}"}
+    result: dict[str, object] = {"target_scans_per_s": 2000}
+    for key, spec in worlds.items():
+        world = load_world(spec)
+        ring_scans_per_s(world, n_poses=20, rings_per_pose=2)  # compile and warm caches
+        print(f"bench: {spec} ...", file=sys.stderr, flush=True)
+        result[key] = {
+            "world": spec,
+            "size_m": [round(world.width_m, 1), round(world.height_m, 1)],
+            "walls": len(world.segments),
+            "scans_per_s": round(ring_scans_per_s(world), 1),
+            "sim_realtime_factor": round(sim_realtime_factor(world), 1),
+        }
+    result["scans_per_s"] = min(result[k]["scans_per_s"] for k in worlds)  # type: ignore[index]
+    result["peak_rss_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1)
+    print(json.dumps(result, indent=2))
+    return 0

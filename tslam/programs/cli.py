@@ -1,0 +1,44 @@
+"""The ``tslam`` command line. Every user mistake ends in one line on stderr and exit code 2."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from hal.errors import HalError
+from sim_backend.world import WorldError
+
+
+class UserError(Exception):
+    """A mistake in what the user asked for; printed as one line."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from tslam.programs import bench_cmd, sim_cmd, world_cmds
+
+    parser = argparse.ArgumentParser(
+        prog="tslam", description="Topological SLAM on the generalized Voronoi graph."
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    world_cmds.add_parsers(sub)
+    sim_cmd.add_parser(sub)
+    bench_cmd.add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.run(args) or 0)
+    except (UserError, WorldError, HalError) as exc:
+        print(f"tslam: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("tslam: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
