@@ -112,8 +112,7 @@ class Lifecycle:
         if self._state not in states:
             allowed = " or ".join(s.value for s in states)
             raise LifecycleError(
-                f"{self.backend_name}: cannot {what} while {self._state.value}"
-                f" (needs {allowed})"
+                f"{self.backend_name}: cannot {what} while {self._state.value} (needs {allowed})"
             )
 
     def _require_open(self, what: str) -> None:

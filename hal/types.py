@@ -32,7 +32,8 @@ class Odometry:
 
 @dataclass(frozen=True)
 class Twist:
-    """A synchro-drive velocity command: translation along the heading, steering and turret rates."""
+    """A synchro-drive velocity command: translation along the heading, steering and turret
+    rates."""
 
     v_mps: float = 0.0
     steer_radps: float = 0.0

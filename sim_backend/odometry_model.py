@@ -62,9 +62,7 @@ class DriftParams:
 class DeadReckoning:
     """Integrates encoder increments into the robot's own pose estimate."""
 
-    def __init__(
-        self, true_heading: float, params: DriftParams, rng: np.random.Generator
-    ) -> None:
+    def __init__(self, true_heading: float, params: DriftParams, rng: np.random.Generator) -> None:
         # Like the real base after power-up, dead reckoning starts at the origin, heading 0.
         self.x = 0.0
         self.y = 0.0

@@ -52,9 +52,7 @@ class SimParams:
         if sorted(self.firing_order) != sorted(set(self.firing_order)) or not all(
             0 <= i < self.n_sonars for i in self.firing_order
         ):
-            raise ValueError(
-                f"firing_order must list distinct transducers 0..{self.n_sonars - 1}"
-            )
+            raise ValueError(f"firing_order must list distinct transducers 0..{self.n_sonars - 1}")
         if not self.firing_order:
             raise ValueError("firing_order must name at least one transducer")
         if self.fire_interval_s <= 0 or self.physics_dt_s <= 0:
@@ -101,7 +99,9 @@ class SimRobot:
         self.stall = False
         self.motors_on = True
         self.collisions = 0
-        self.dr = DeadReckoning(s.theta, DriftParams.level(self.p.drift), np.random.default_rng(odo_seq))
+        self.dr = DeadReckoning(
+            s.theta, DriftParams.level(self.p.drift), np.random.default_rng(odo_seq)
+        )
         self._segs = np.ascontiguousarray(world.segments, dtype=np.float64)
         self._corners = np.ascontiguousarray(world.corners, dtype=np.float64)
         self._convex = np.ascontiguousarray(world.corner_convex, dtype=np.bool_)
@@ -229,10 +229,8 @@ class SimRobot:
             if u < p.outlier_prob:
                 # Multipath and crosstalk: a reading unrelated to the geometry.
                 r = p.min_range_m + self._sonar_rng.random() * (p.max_range_m - p.min_range_m)
-            elif not math.isfinite(r):
-                return math.nan
-            elif u < p.outlier_prob + p.dropout_prob:
-                return math.nan
+            elif not math.isfinite(r) or u < p.outlier_prob + p.dropout_prob:
+                return math.nan  # no echo, or an echo the receiver missed
             else:
                 r += self._sonar_rng.normal(0.0, p.range_noise_m + p.range_noise_rel * r)
         elif not math.isfinite(r):

@@ -63,9 +63,7 @@ class World:
         """Raise WorldError unless a disk of ``robot_radius_m`` fits at the start pose."""
         p = np.array([[self.start.x, self.start.y]])
         if not bool(self.is_free(p)[0]):
-            raise WorldError(
-                f"start ({self.start.x:.3f}, {self.start.y:.3f}) is not in free space"
-            )
+            raise WorldError(f"start ({self.start.x:.3f}, {self.start.y:.3f}) is not in free space")
         clearance = float(point_segments_distance(p, self.segments)[0])
         if clearance < robot_radius_m:
             raise WorldError(
@@ -288,8 +286,10 @@ def _grid_geometry(
         + (~padded[1:, :-1])
         + (~padded[1:, 1:])
     )
-    diag = (padded[:-1, :-1] == padded[1:, 1:]) & (padded[:-1, 1:] == padded[1:, :-1]) & (
-        padded[:-1, :-1] != padded[:-1, 1:]
+    diag = (
+        (padded[:-1, :-1] == padded[1:, 1:])
+        & (padded[:-1, 1:] == padded[1:, :-1])
+        & (padded[:-1, :-1] != padded[:-1, 1:])
     )
     is_corner = (quad == 1) | (quad == 3) | diag
     vr, vc = np.nonzero(is_corner)
