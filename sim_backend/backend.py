@@ -2,7 +2,8 @@
 
 Options (all optional except the world): ``target`` or ``world`` (a built-in name or a world
 file), ``seed`` (int), ``drift`` (none|paper|severe), ``beam_deg`` (half beam width),
-``noise`` (sonar noise on or off), ``dropout``, ``outliers``, ``quantize_inch``,
+``noise`` (sonar noise on or off), ``dropout``, ``outliers``, ``side_lobes`` (probability
+a side lobe returns a near wall), ``quantize_inch``,
 ``fire_interval_s``, ``physics_dt_s``.
 """
 
@@ -67,6 +68,7 @@ class SimBackend(Drive, Encoders, SonarRing):
             sonar_noise=opts.bool("noise", True),
             dropout_prob=opts.float("dropout", p.dropout_prob, lo=0.0, hi=1.0),
             outlier_prob=opts.float("outliers", p.outlier_prob, lo=0.0, hi=1.0),
+            side_lobe_prob=opts.float("side_lobes", p.side_lobe_prob, lo=0.0, hi=1.0),
             quantize_inch=opts.bool("quantize_inch", False),
             fire_interval_s=opts.float("fire_interval_s", p.fire_interval_s, lo=0.004, hi=1.0),
             physics_dt_s=opts.float("physics_dt_s", p.physics_dt_s, lo=0.001, hi=0.2),

@@ -72,13 +72,17 @@ def sonar_echo(
     half_beam: float,
     max_range: float,
     convex_range: float,
+    side_lobe: float,
+    side_range: float,
     segs: np.ndarray,
     seg_idx: np.ndarray,
     corners: np.ndarray,
     convex: np.ndarray,
     corner_idx: np.ndarray,
-) -> float:
-    """Range of the first echo a transducer at ``(ox, oy)`` pointing at ``yaw`` hears, or inf.
+) -> tuple[float, float]:
+    """Ranges of the first echo a transducer at ``(ox, oy)`` pointing at ``yaw`` hears in its
+    main lobe and in its side lobes (inf: none). Whether a side-lobe echo is heard is for the
+    caller to draw.
 
     The model (a specular ultrasonic cone):
 
@@ -88,12 +92,16 @@ def sonar_echo(
     - a room corner (two walls meeting with free space inside) echoes from its vertex whenever
       the vertex is inside the beam, like a corner reflector;
     - an obstacle's convex edge diffracts a weak echo, heard only up to ``convex_range``;
+    - the side lobes (up to ``side_lobe`` off the axis) return a flat wall at normal
+      incidence too, but weakly: only up to ``side_range``;
     - an echo counts only if nothing blocks the straight path to it.
     """
     ax = math.cos(yaw)
     ay = math.sin(yaw)
     cos_half = math.cos(half_beam)
+    cos_side = math.cos(side_lobe)
     best = np.inf
+    side = np.inf
     for k in range(seg_idx.shape[0]):
         s = seg_idx[k]
         x1 = segs[s, 0]
@@ -111,12 +119,15 @@ def sonar_echo(
         vx = fx - ox
         vy = fy - oy
         d = math.sqrt(vx * vx + vy * vy)
-        if d < _EPS or d >= best or d > max_range:
+        if d < _EPS or d > max_range:
             continue
-        if vx * ax + vy * ay < cos_half * d:
-            continue
-        if _visible(ox, oy, fx, fy, segs, seg_idx, s):
-            best = d
+        along = vx * ax + vy * ay
+        if along >= cos_half * d:
+            if d < best and _visible(ox, oy, fx, fy, segs, seg_idx, s):
+                best = d
+        elif along >= cos_side * d and d <= side_range and d < side:
+            if _visible(ox, oy, fx, fy, segs, seg_idx, s):
+                side = d
     for k in range(corner_idx.shape[0]):
         c = corner_idx[k]
         vx = corners[c, 0] - ox
@@ -129,7 +140,7 @@ def sonar_echo(
             continue
         if _visible(ox, oy, corners[c, 0], corners[c, 1], segs, seg_idx, -1):
             best = d
-    return best
+    return best, side
 
 
 def segments_near(segs: np.ndarray, x: float, y: float, radius: float) -> np.ndarray:

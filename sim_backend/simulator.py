@@ -35,6 +35,11 @@ class SimParams:
     max_range_m: float = 6.5
     #: Convex obstacle edges diffract a weak echo, heard only this far.
     convex_echo_range_m: float = 4.0
+    #: Side lobes: a wall whose normal is within this angle of the axis (beyond the main
+    #: beam) echoes with ``side_lobe_prob``, up to ``side_lobe_range_m``.
+    side_lobe_rad: float = math.radians(30.0)
+    side_lobe_range_m: float = 2.5
+    side_lobe_prob: float = 0.5
     range_noise_m: float = 0.01
     range_noise_rel: float = 0.01
     dropout_prob: float = 0.02
@@ -211,10 +216,13 @@ class SimRobot:
         yaw = pose.turret + self._angles[i]
         ox = pose.x + p.ring_radius_m * math.cos(yaw)
         oy = pose.y + p.ring_radius_m * math.sin(yaw)
-        r = sonar_echo(
+        r, side = sonar_echo(
             ox, oy, yaw, p.half_beam_rad, p.max_range_m, p.convex_echo_range_m,
+            p.side_lobe_rad, p.side_lobe_range_m,
             self._segs, self._seg_idx, self._corners, self._convex, self._corner_idx,
         )  # fmt: skip
+        if side < r and self._sonar_rng.random() < p.side_lobe_prob:
+            r = side
         ring = self.ring
         ring.ranges[i] = self._measure(r)
         ring.yaw_robot[i] = pose.turret - pose.theta + self._angles[i]

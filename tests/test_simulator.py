@@ -13,7 +13,7 @@ from sim_backend.simulator import SimParams, SimRobot
 from sim_backend.world import StartPose
 from tests.conftest import box_world
 
-EXACT = SimParams(sonar_noise=False, drift="none")
+EXACT = SimParams(sonar_noise=False, drift="none", side_lobe_prob=0.0)
 
 
 def test_acceleration_and_speed_limits():

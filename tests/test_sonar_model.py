@@ -12,7 +12,7 @@ from sim_backend.simulator import INCH, NOMAD_FIRING_ORDER, SimParams, SimRobot
 from sim_backend.world import PolygonWorld, StartPose
 from tests.conftest import box_world
 
-EXACT = SimParams(sonar_noise=False, drift="none")
+EXACT = SimParams(sonar_noise=False, drift="none", side_lobe_prob=0.0)
 
 
 def ring(world, params=EXACT, seed=0):
@@ -131,3 +131,17 @@ def test_ring_fires_in_order_one_transducer_per_interval():
     # the last one at 0.96 s: a full ring in about one second, as on the real robot.
     assert np.allclose(stamps[order], 0.06 * (np.arange(16) + 1))
     assert robot.ring.fired == 32
+
+
+def test_side_lobes_return_a_near_wall_beyond_the_main_beam():
+    # Turn the robot 20 degrees: transducer 4's axis is 20 degrees off the normal of the wall
+    # at y = 4, outside the main beam but inside the side lobes, and the wall is 1.8 m away.
+    start = StartPose(5.0, 2.0, math.radians(20.0))
+    w = box_world(20, 4, start)
+    yaw = math.radians(20.0 + 90.0)
+    oy = 2.0 + 0.23 * math.sin(yaw)
+    assert math.isnan(ring(w, replace(EXACT, side_lobe_prob=0.0))[4])
+    assert ring(w, replace(EXACT, side_lobe_prob=1.0))[4] == pytest.approx(4.0 - oy, abs=1e-9)
+    # Beyond the side lobes' range the same geometry is silent.
+    far = box_world(20, 8, StartPose(5.0, 2.0, math.radians(20.0)))
+    assert math.isnan(ring(far, replace(EXACT, side_lobe_prob=1.0))[4])
