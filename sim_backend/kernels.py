@@ -125,9 +125,13 @@ def sonar_echo(
         if along >= cos_half * d:
             if d < best and _visible(ox, oy, fx, fy, segs, seg_idx, s):
                 best = d
-        elif along >= cos_side * d and d <= side_range and d < side:
-            if _visible(ox, oy, fx, fy, segs, seg_idx, s):
-                side = d
+        elif (
+            along >= cos_side * d
+            and d <= side_range
+            and d < side
+            and _visible(ox, oy, fx, fy, segs, seg_idx, s)
+        ):
+            side = d
     for k in range(corner_idx.shape[0]):
         c = corner_idx[k]
         vx = corners[c, 0] - ox
