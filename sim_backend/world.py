@@ -71,6 +71,14 @@ class World:
                 f" the robot needs {robot_radius_m:.3f} m"
             )
 
+    def wall_arcs(self) -> WallArcs:
+        """Where each segment lies along its chain of connected walls (computed once)."""
+        arcs = getattr(self, "_wall_arcs", None)
+        if arcs is None:
+            arcs = chain_walls(self.segments)
+            self._wall_arcs = arcs
+        return arcs
+
     @property
     def width_m(self) -> float:
         return self.bounds[2] - self.bounds[0]
@@ -170,6 +178,77 @@ class GridWorld(World):
         free = np.zeros(len(pts), dtype=bool)
         free[inside] = ~self.occupied[row[inside], col[inside]]
         return free
+
+
+@dataclass(frozen=True)
+class WallArcs:
+    """Segments chained end to end into walls, for distances *along* a wall.
+
+    Segment ``k`` belongs to chain ``chain[k]`` and runs from arc length ``arc0[k]`` to
+    ``arc0[k] + length`` (``reversed[k]``: from its second endpoint to its first). A closed
+    chain of total length ``closed_length[c]`` wraps around; an open one has ``inf`` there.
+    """
+
+    chain: np.ndarray
+    arc0: np.ndarray
+    reversed: np.ndarray
+    closed_length: np.ndarray
+
+    def position(self, seg: np.ndarray, t: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+        """Arc length of the point at parameter ``t`` of segments ``seg``."""
+        along = np.where(self.reversed[seg], 1.0 - t, t) * lengths[seg]
+        return self.arc0[seg] + along
+
+    def along_wall(
+        self, chain_a: np.ndarray, s_a: np.ndarray, chain_b: np.ndarray, s_b: np.ndarray
+    ) -> np.ndarray:
+        """Distance along the wall between two points (inf when on different chains)."""
+        d = np.abs(s_a - s_b)
+        total = self.closed_length[chain_a]
+        d = np.where(np.isfinite(total), np.minimum(d, total - d), d)
+        return np.where(chain_a == chain_b, d, np.inf)
+
+
+def chain_walls(segments: np.ndarray) -> WallArcs:
+    """Walk segments that share endpoints into chains (rings where they close)."""
+    n = len(segments)
+    keys = np.round(segments.reshape(-1, 2) * 1e7).astype(np.int64)
+    _, vid = np.unique(keys, axis=0, return_inverse=True)
+    vid = vid.reshape(n, 2)
+    at: dict[int, list[int]] = {}
+    for k in range(n):
+        at.setdefault(int(vid[k, 0]), []).append(k)
+        at.setdefault(int(vid[k, 1]), []).append(k)
+    lengths = np.hypot(segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1])
+    chain = np.full(n, -1, dtype=np.int64)
+    arc0 = np.zeros(n)
+    rev = np.zeros(n, dtype=bool)
+    closed: list[float] = []
+
+    def loose(v: int) -> bool:
+        return len(at[v]) == 1
+
+    # Walk open chains from a loose end first, so their arc length runs end to end.
+    open_starts = [k for k in range(n) if loose(int(vid[k, 0])) or loose(int(vid[k, 1]))]
+    for start in open_starts + list(range(n)):
+        if chain[start] >= 0:
+            continue
+        c = len(closed)
+        first_v = int(vid[start, 1]) if loose(int(vid[start, 1])) else int(vid[start, 0])
+        k, v, s = start, first_v, 0.0
+        while True:
+            chain[k] = c
+            arc0[k] = s
+            rev[k] = int(vid[k, 0]) != v
+            s += lengths[k]
+            v = int(vid[k, 1]) if not rev[k] else int(vid[k, 0])
+            nxt = [j for j in at[v] if chain[j] < 0]
+            if not nxt:
+                ends_where_it_began = v == first_v
+                closed.append(s if ends_where_it_began else math.inf)
+                break
+            k = nxt[0]
+    return WallArcs(chain, arc0, rev, np.asarray(closed, dtype=float))
 
 
 def point_segments_distance(points: np.ndarray, segments: np.ndarray) -> np.ndarray:

@@ -54,7 +54,16 @@ def test_world_info_on_a_user_polygon_file(capsys, tmp_path):
     info = json.loads(out)
     assert code == 0 and info["name"] == "tee"
     assert info["free_area_m2"] == pytest.approx(32.0)
-    assert info["meet_point_count"] == 1 and info["meet_points"][0]["degree"] == 3
+    # The junction, plus one meet point near each of the three flat dead ends, where the
+    # corridor's edge splits into two branches that run into the end's corners.
+    assert info["meet_point_count"] == 4
+    assert all(m["degree"] == 3 for m in info["meet_points"])
+    assert info["boundary_point_count"] == 6
+    # The junction is equidistant to the bottom wall and the two corners (4, 2), (6, 2):
+    # x = 5, y = 1.25.
+    junction = min(info["meet_points"], key=lambda m: (m["x"] - 5) ** 2 + (m["y"] - 1.25) ** 2)
+    assert (junction["x"], junction["y"]) == pytest.approx((5.0, 1.25), abs=0.02)
+    assert junction["clearance_m"] == pytest.approx(1.25, abs=0.01)
 
 
 def test_world_render_writes_svg(capsys, tmp_path):
