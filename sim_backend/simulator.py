@@ -183,7 +183,8 @@ class SimRobot:
                 clear = self._distance(nx, ny)
                 self.stall = self.cmd_v != 0.0
                 self.v = self.cmd_v = 0.0
-                self.collisions += 1
+                if not self.bumper:
+                    self.collisions += 1  # a new contact, not one still being pushed on
                 self.bumper = True
             else:
                 self.bumper = clear < r + 1e-3

@@ -20,7 +20,7 @@ from sim_backend.backend import SimBackend
 from sim_backend.odometry_model import DRIFT_LEVELS
 from tslam.programs.cli import UserError
 from tslam.programs.output import write_text_atomic
-from tslam.programs.wander import wander_step
+from tslam.programs.wander import Wanderer
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -51,12 +51,15 @@ def run_sim(
     dr_path: list[tuple[float, float]] = []
     max_err = 0.0
     next_report = 0.0
+    wanderer = Wanderer(backend.limits)
     with backend:
         clock = backend.clock
         t0 = clock.now()
         while clock.now() - t0 < duration_s:
             odo = backend.odometry()
-            twist = wander_step(backend.scan(), backend.limits, odo.turret_rad - odo.heading_rad)
+            twist = wanderer.step(
+                backend.scan(), backend.status(), odo.turret_rad - odo.heading_rad, clock.now()
+            )
             backend.command(twist)
             clock.sleep(period)
             tp = robot.true_pose()
@@ -125,5 +128,10 @@ def _render(backend: SimBackend, paths: dict[str, list[tuple[float, float]]]) ->
     draw_world(canvas, world)
     draw_gvg(canvas, compute_gvg(world))
     canvas.polyline(paths["dead_reckoned"], stroke="#d62728", stroke_width=1.5, fill="none")
-    canvas.polyline(paths["true"], stroke="#1f77b4", stroke_width=1.5, fill="none")
+    canvas.polyline(paths["true"], stroke="#111111", stroke_width=1.5, fill="none")
+    xmin, _, _, ymax = world.bounds
+    canvas.text(
+        xmin, ymax + 0.2, "black: true path   red: dead reckoning   blue: ground-truth GVG",
+        font_size=12,
+    )  # fmt: skip
     return canvas.to_string()
