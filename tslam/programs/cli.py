@@ -15,7 +15,7 @@ class UserError(Exception):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from tslam.programs import bench_cmd, sim_cmd, world_cmds
+    from tslam.programs import bench_cmd, sim_cmd, trace_cmd, world_cmds
 
     parser = argparse.ArgumentParser(
         prog="tslam", description="Topological SLAM on the generalized Voronoi graph."
@@ -23,6 +23,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     world_cmds.add_parsers(sub)
     sim_cmd.add_parser(sub)
+    trace_cmd.add_parser(sub)
     bench_cmd.add_parser(sub)
     return parser
 

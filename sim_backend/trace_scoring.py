@@ -1,0 +1,99 @@
+"""Scoring a traced run against the ground-truth GVG (for ``tslam trace``).
+
+Inputs are plain arrays and records, so the scorer knows nothing of the tracer:
+
+- ``path``: ``(n, 3)`` true positions with the encoder distance at each (x, y, distance);
+- ``nodes``: one record per node the robot reported: kind ("meet" | "boundary"), its true
+  position at the moment it was reported, the degree it saw, the encoder distance then;
+- ``edges``: one record per edge traversal: the indices of its end nodes in ``nodes`` and the
+  length the robot measured.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim_backend.ground_truth import GroundTruthGVG
+
+
+@dataclass(frozen=True)
+class SeenNode:
+    kind: str
+    x: float
+    y: float
+    degree: int
+    distance_m: float
+
+
+@dataclass(frozen=True)
+class SeenEdge:
+    start: int
+    end: int
+    length_m: float
+
+
+def score_trace(
+    gvg: GroundTruthGVG,
+    path: np.ndarray,
+    nodes: list[SeenNode],
+    edges: list[SeenEdge],
+    skip_after_node_m: float = 0.5,
+) -> dict[str, float | int | None]:
+    """The figures of ``trace_report.json``."""
+    report: dict[str, float | int | None] = {}
+    # Edge error: the true path's distance from the true GVG, from the first node on, leaving
+    # out the first ``skip_after_node_m`` after each node (where the robot leaves a node along
+    # its departure before the laws take over).
+    if nodes and len(path):
+        node_d = np.array([n.distance_m for n in nodes])
+        d = path[:, 2]
+        after = d[:, None] - node_d[None, :]
+        near_node = ((after >= 0) & (after < skip_after_node_m)).any(axis=1)
+        keep = (d >= node_d.min()) & ~near_node
+        err = gvg.distance_to(path[keep, :2]) if keep.any() else np.zeros(0)
+    else:
+        err = np.zeros(0)
+    report["edge_samples"] = len(err)
+    report["edge_error_median_m"] = _r(float(np.median(err))) if len(err) else None
+    report["edge_error_p95_m"] = _r(float(np.percentile(err, 95))) if len(err) else None
+    report["edge_error_max_m"] = _r(float(err.max())) if len(err) else None
+
+    meets = [i for i, n in enumerate(nodes) if n.kind == "meet"]
+    matched: dict[int, int] = {}
+    errors, degree_ok = [], 0
+    for i in meets:
+        n = nodes[i]
+        true = gvg.nearest_node(n.x, n.y, kind="meet")
+        if true is None:
+            continue
+        matched[i] = true.id
+        errors.append(math.hypot(n.x - true.x, n.y - true.y))
+        degree_ok += int(n.degree == true.degree)
+    report["meet_points_seen"] = len(meets)
+    report["meet_point_error_max_m"] = _r(max(errors)) if errors else None
+    report["meet_point_error_median_m"] = _r(float(np.median(errors))) if errors else None
+    report["degree_match_ratio"] = _r(degree_ok / len(meets)) if meets else None
+
+    rel, unmatched = [], 0
+    for e in edges:
+        u, v = matched.get(e.start), matched.get(e.end)
+        if u is None or v is None or u == v:
+            continue
+        candidates = [g.length_m for g in gvg.edges if {g.u, g.v} == {u, v}]
+        if not candidates:
+            unmatched += 1  # the robot joined two meet points the ground truth does not
+            continue
+        true_len = min(candidates, key=lambda length: abs(length - e.length_m))
+        rel.append(abs(e.length_m - true_len) / true_len)
+    report["meet_to_meet_edges"] = len(rel) + unmatched
+    report["edges_not_in_ground_truth"] = unmatched
+    report["edge_length_error_max_rel"] = _r(max(rel)) if rel else None
+    report["edge_length_error_median_rel"] = _r(float(np.median(rel))) if rel else None
+    return report
+
+
+def _r(x: float) -> float:
+    return round(x, 4)

@@ -1,0 +1,96 @@
+"""Sonar ring to obstacles: the Fig. 4 rules, spike rejection, motion compensation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hal.types import Odometry, SonarScan
+from tslam.core.sensing import RingSensor, local_minima
+
+
+def ring_points(ranges, n=None):
+    r = np.asarray(ranges, dtype=float)
+    n = n or len(r)
+    ang = np.arange(n) * 2 * math.pi / n
+    return np.column_stack([r * np.cos(ang), r * np.sin(ang)])
+
+
+def test_fig4_only_local_minima_are_obstacles():
+    # Eight sensors as in Fig. 4: H (index 7) is the smallest; A (0) is second smallest but
+    # next to H, so not a minimum; C (2) is the second obstacle.
+    obs = local_minima(ring_points([12, 30, 14, 25, 40, 40, 22, 10]), merge_rad=0.0)
+    assert [round(o.distance_m) for o in obs] == [10, 14]  # H, then C
+    assert obs[0].bearing_rad == pytest.approx(math.radians(-45))
+    assert obs[1].bearing_rad == pytest.approx(math.radians(90))
+    # The gradient points away from the obstacle.
+    assert (obs[0].gx, obs[0].gy) == pytest.approx((-0.7071, 0.7071), abs=1e-3)
+
+
+def test_two_equal_adjacent_readings_are_one_obstacle_between_them():
+    obs = local_minima(ring_points([5, 2, 2, 5, 6, 7, 6, 5]), merge_rad=0.0)
+    first = obs[0]
+    assert first.distance_m == pytest.approx(2.0)
+    assert first.bearing_rad == pytest.approx(math.radians(67.5))  # between 45 and 90
+
+
+def test_no_echo_separates_and_is_never_an_obstacle():
+    r = [np.nan] * 16
+    r[4], r[12] = 1.0, 1.2
+    obs = local_minima(ring_points(r))
+    assert [o.distance_m for o in obs] == pytest.approx([1.0, 1.2])
+    assert local_minima(ring_points([np.nan] * 16)) == []
+
+
+def test_one_wall_split_by_a_silent_transducer_is_one_obstacle():
+    r = [5.0] * 16
+    r[3], r[4], r[5] = 1.05, np.nan, 1.0
+    assert len([o for o in local_minima(ring_points(r)) if o.distance_m < 2]) == 1
+
+
+def _scan(ranges, stamps, yaw0=0.0):
+    n = len(ranges)
+    yaw = yaw0 + np.arange(n) * 2 * math.pi / n
+    return SonarScan(
+        ranges_m=np.asarray(ranges, dtype=float),
+        x_m=0.23 * np.cos(yaw),
+        y_m=0.23 * np.sin(yaw),
+        yaw_rad=yaw,
+        stamps_s=np.asarray(stamps, dtype=float),
+        min_range_m=0.15,
+        max_range_m=6.5,
+        half_beam_rad=math.radians(12.5),
+    )
+
+
+def test_old_wall_reading_is_carried_into_the_current_frame():
+    sensor = RingSensor()
+    # At t = 0 transducer 0 hears a wall 2 m ahead (2.23 m from the centre); then the robot
+    # drives 0.5 m toward it without that transducer firing again.
+    ranges = [np.nan] * 16
+    ranges[0] = 2.0
+    sensor.update(_scan(ranges, [0.0] * 16), Odometry(0.0, 0.0, 0.0, 0.0, 0.0))
+    obs = sensor.update(_scan(ranges, [0.0] * 16), Odometry(0.5, 0.0, 0.0, 0.0, 1.0))
+    assert obs[0].distance_m == pytest.approx(1.73, abs=1e-9)
+    # Turning in place rotates it in the robot frame, at the same distance.
+    obs = sensor.update(_scan(ranges, [0.0] * 16), Odometry(0.5, 0.0, 0.5, 0.0, 2.0))
+    assert obs[0].distance_m == pytest.approx(1.73, abs=1e-9)
+    assert obs[0].bearing_rad == pytest.approx(-0.5, abs=1e-9)
+
+
+def test_a_lone_spike_is_held_until_confirmed():
+    sensor = RingSensor()
+    base = [3.0] * 16
+    odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0)
+    sensor.update(_scan(base, np.zeros(16)), odo)
+    spiky = list(base)
+    spiky[5] = 0.5
+    stamps = np.zeros(16)
+    stamps[5] = 1.0
+    obs = sensor.update(_scan(spiky, stamps), Odometry(0.0, 0.0, 0.0, 0.0, 1.0))
+    assert min(o.distance_m for o in obs) > 3.0  # held back
+    stamps[5] = 2.0
+    obs = sensor.update(_scan(spiky, stamps), Odometry(0.0, 0.0, 0.0, 0.0, 2.0))
+    assert obs[0].distance_m == pytest.approx(0.73)  # repeated: it is real

@@ -1,0 +1,216 @@
+"""From a sonar ring to obstacles: distances and their gradients (section III-A, Fig. 4).
+
+The ring fires one transducer at a time, so a scan holds readings up to a second old taken
+from other poses. Each echo is therefore carried into the robot's *current* frame with the
+dead reckoning between its stamp and now: over a second, odometry is good to millimetres
+(its drift matters over tens of metres, not here).
+
+Each echo is placed on the transducer's axis (the paper's centreline model, Fig. 3), and,
+since a wall returns sound only at near-normal incidence, taken as a wall square to that axis:
+its distance and normal then stay exact however far the robot has moved along it since the
+transducer fired (a point model would tilt every gradient by the motion). The ring is then
+read as a circular array of distances from the robot's centre, and obstacles are its
+local minima, by the rules of Fig. 4:
+
+- a reading that is not a local minimum is not a separate obstacle;
+- a run of equal adjacent readings (within ``plateau_m``) that is lower than the readings on
+  both sides is one obstacle, lying between them;
+- a transducer with no echo reads "infinitely far": it never is a minimum, and it separates
+  the minima on either side;
+- an isolated short reading far below its own previous reading and both neighbours (a
+  multipath or crosstalk spike) is held back until the transducer confirms it;
+- two minima closer than ``merge_rad`` in bearing are one obstacle (a wall heard by two
+  transducers with a silent one between them), as in the ground truth's separation rule.
+
+Each obstacle ``i`` carries ``d_i`` (metres from the robot's centre) and ``grad_i``, the unit
+vector pointing away from its closest point, both in the robot frame.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from hal.types import Odometry, SonarScan
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """One local minimum of the ring: distance and gradient in the robot frame."""
+
+    distance_m: float
+    x_m: float  # closest point, robot frame
+    y_m: float
+    gx: float  # unit gradient: away from the closest point
+    gy: float
+    bearing_rad: float
+
+
+class PoseHistory:
+    """Recent dead-reckoned poses, to carry old readings into the current frame."""
+
+    def __init__(self, horizon_s: float = 3.0) -> None:
+        self.horizon_s = horizon_s
+        self._t: deque[float] = deque()
+        self._pose: deque[tuple[float, float, float]] = deque()
+
+    def add(self, odo: Odometry) -> None:
+        if self._t and odo.stamp_s <= self._t[-1]:
+            if odo.stamp_s == self._t[-1]:
+                self._pose[-1] = (odo.x_m, odo.y_m, odo.heading_rad)
+            return
+        self._t.append(odo.stamp_s)
+        self._pose.append((odo.x_m, odo.y_m, odo.heading_rad))
+        while len(self._t) > 2 and self._t[1] < odo.stamp_s - self.horizon_s:
+            self._t.popleft()
+            self._pose.popleft()
+
+    def at(self, stamps: np.ndarray) -> np.ndarray:
+        """Poses ``(n, 3)`` at ``stamps``, linearly interpolated; clamped at the ends."""
+        t = np.fromiter(self._t, float, len(self._t))
+        p = np.array(self._pose, dtype=float).reshape(-1, 3)
+        if len(t) == 0:
+            raise ValueError("no odometry yet")
+        x = np.interp(stamps, t, p[:, 0])
+        y = np.interp(stamps, t, p[:, 1])
+        th = np.interp(stamps, t, np.unwrap(p[:, 2]))
+        return np.column_stack([x, y, th])
+
+    def latest(self) -> tuple[float, float, float]:
+        return self._pose[-1]
+
+
+@dataclass
+class SensingParams:
+    plateau_m: float = 0.02
+    spike_m: float = 0.4
+    merge_rad: float = math.radians(50.0)
+
+
+class RingSensor:
+    """Turns scans into obstacles; keeps the little state that spike rejection needs."""
+
+    def __init__(self, params: SensingParams | None = None) -> None:
+        self.p = params or SensingParams()
+        self.history = PoseHistory()
+        self._last_stamp: np.ndarray | None = None
+        self._prev_dist: np.ndarray | None = None
+        self._held: np.ndarray | None = None
+
+    def update(self, scan: SonarScan, odo: Odometry) -> list[Obstacle]:
+        """Obstacles seen from the pose ``odo``, nearest first."""
+        self.history.add(odo)
+        pts = self.echo_points(scan)
+        return local_minima(pts, self.p.plateau_m, self.p.merge_rad)
+
+    def echo_points(self, scan: SonarScan) -> np.ndarray:
+        """Echo points ``(n, 2)`` in the current robot frame, NaN where there is none."""
+        n = len(scan)
+        poses = self.history.at(scan.stamps_s)
+        x0, y0, th0 = self.history.latest()
+        # Echo in the robot frame at firing time, on the transducer's axis.
+        r = scan.ranges_m
+        ex = scan.x_m + r * np.cos(scan.yaw_rad)
+        ey = scan.y_m + r * np.sin(scan.yaw_rad)
+        c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+        wx = poses[:, 0] + c * ex - s * ey
+        wy = poses[:, 1] + s * ex + c * ey
+        c0, s0 = math.cos(th0), math.sin(th0)
+        dx, dy = wx - x0, wy - y0
+        px, py = c0 * dx + s0 * dy, -s0 * dx + c0 * dy
+        # The echo came back at normal incidence: model it as a wall through the echo point,
+        # square to the transducer's axis (as it pointed then). Its distance and normal stay
+        # right however far the robot moved along it since.
+        axis = scan.yaw_rad + poses[:, 2] - th0
+        ux, uy = np.cos(axis), np.sin(axis)
+        dist = px * ux + py * uy
+        pts = np.column_stack([dist * ux, dist * uy])
+        fresh = (
+            np.ones(n, dtype=bool)
+            if self._last_stamp is None or len(self._last_stamp) != n
+            else scan.stamps_s > self._last_stamp
+        )
+        if self._held is None or len(self._held) != n:
+            self._held = np.zeros(n, dtype=bool)
+            self._prev_dist = dist.copy()
+        prev = self._prev_dist
+        assert prev is not None
+        left, right = np.roll(dist, 1), np.roll(dist, -1)
+        nan_inf = np.where(np.isnan(dist), np.inf, dist)
+        spike = (
+            fresh
+            & ~self._held
+            & (nan_inf < np.where(np.isnan(prev), np.inf, prev) - self.p.spike_m)
+            & (nan_inf < np.where(np.isnan(left), np.inf, left) - self.p.spike_m)
+            & (nan_inf < np.where(np.isnan(right), np.inf, right) - self.p.spike_m)
+        )
+        # A spike is held once; if the transducer repeats it, it is real.
+        self._held = np.where(fresh, spike, self._held)
+        self._prev_dist = np.where(fresh, dist, prev)
+        self._last_stamp = scan.stamps_s.copy()
+        pts[self._held] = np.nan
+        return pts
+
+
+def local_minima(
+    pts: np.ndarray, plateau_m: float = 0.02, merge_rad: float = math.radians(50.0)
+) -> list[Obstacle]:
+    """The Fig. 4 rules on a circular array of echo points (robot frame, NaN = no echo)."""
+    n = len(pts)
+    d = np.hypot(pts[:, 0], pts[:, 1])
+    d = np.where(np.isnan(d), np.inf, d)
+    if not np.isfinite(d).any():
+        return []
+    out: list[Obstacle] = []
+    visited = np.zeros(n, dtype=bool)
+    for i in range(n):
+        if visited[i] or not math.isfinite(d[i]):
+            continue
+        # Grow the plateau of readings equal to d[i] around i.
+        lo, hi = i, i
+        while hi - lo + 1 < n and abs(d[(hi + 1) % n] - d[i]) <= plateau_m:
+            hi += 1
+        while hi - lo + 1 < n and abs(d[(lo - 1) % n] - d[i]) <= plateau_m:
+            lo -= 1
+        idx = [k % n for k in range(lo, hi + 1)]
+        visited[idx] = True
+        if len(idx) == n:
+            continue  # the same distance all round: no direction to call an obstacle
+        level = float(d[idx].max())
+        if d[(lo - 1) % n] <= level or d[(hi + 1) % n] <= level:
+            continue
+        p = pts[idx].mean(axis=0)
+        dist = float(d[idx].mean())
+        norm = math.hypot(p[0], p[1])
+        if norm < 1e-9:
+            continue
+        ux, uy = p[0] / norm, p[1] / norm
+        out.append(
+            Obstacle(
+                distance_m=dist,
+                x_m=ux * dist,
+                y_m=uy * dist,
+                gx=-ux,
+                gy=-uy,
+                bearing_rad=math.atan2(uy, ux),
+            )
+        )
+    out.sort(key=lambda o: o.distance_m)
+    return _merge_split_walls(out, merge_rad)
+
+
+def _merge_split_walls(obstacles: list[Obstacle], merge_rad: float) -> list[Obstacle]:
+    """A wall heard by two transducers with a silent one between them shows as two minima a
+    few tens of degrees apart; the ring cannot resolve obstacles that close in bearing
+    (the ground truth's separation rule), so the nearer one stands for both."""
+    kept: list[Obstacle] = []
+    for o in obstacles:  # nearest first
+        if all(
+            abs((o.bearing_rad - k.bearing_rad + math.pi) % (2 * math.pi) - math.pi) >= merge_rad
+            for k in kept
+        ):
+            kept.append(o)
+    return kept

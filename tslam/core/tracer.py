@@ -1,0 +1,308 @@
+"""Access the GVG, trace its edges, home onto meet points, turn back at boundary points.
+
+A hybrid controller (the paper's term) over the laws of ``tslam.core.laws``. It is pure:
+each ``step`` takes the latest scan, odometry, drive status and the time, and returns a
+drive command and the events the map needs. Which edge to take next at a meet point is
+asked of a ``choose`` callback, so the exploration arbiter can decide later; the default
+takes the first edge counter-clockwise from the one the robot arrived by.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from hal.interfaces import DriveLimits
+from hal.types import DriveStatus, Odometry, SonarScan, Twist
+from tslam.core import laws
+from tslam.core.sensing import Obstacle, RingSensor
+
+TAU = 2.0 * math.pi
+
+
+class Behaviour(enum.Enum):
+    ACCESS = "access"
+    TRACE = "trace"
+    HOME = "home"
+    SETTLE = "settle"
+    DEPART = "depart"
+    STOPPED = "stopped"
+
+
+@dataclass(frozen=True)
+class TracerParams:
+    alpha_mps: float = 0.2  # speed along an edge
+    beta_per_s: float = 0.8  # pull back onto the edge
+    access_mps: float = 0.2
+    on_edge_tol_m: float = 0.06  # |d1 - d2| that counts as being on the GVG
+    meet_tol_m: float = 0.12  # d3 - d1 that starts homing
+    arm_tol_m: float = 0.25  # d3 - d1 that re-arms meet detection after leaving a node
+    degree_tol_m: float = 0.10  # d_k - d1 that counts obstacle k at a homed meet point
+    settle_tol_m: float = 0.03  # homing stops this close to the estimate
+    converge_tol_m: float = 0.05  # ... and has converged if a fresh ring agrees this well
+    ring_refresh_s: float = 1.0  # time for every transducer to fire again
+    home_gain: float = 1.0
+    home_max_mps: float = 0.15
+    boundary_clearance_m: float = 0.45  # the edge has run into its corner
+    depart_m: float = 0.35  # leave a meet point along its departure before tracing
+    lost_timeout_s: float = 1.5
+    off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
+
+
+@dataclass(frozen=True)
+class MeetPointReached:
+    stamp_s: float
+    x_m: float  # dead-reckoned
+    y_m: float
+    clearance_m: float
+    degree: int
+    departures_rad: tuple[float, ...]  # odometry frame, counter-clockwise
+    arrival_index: int | None  # which departure the robot came in by
+    relative_rad: tuple[float, ...]  # departure angles measured from the arrival edge
+
+
+@dataclass(frozen=True)
+class BoundaryReached:
+    stamp_s: float
+    x_m: float
+    y_m: float
+    clearance_m: float
+
+
+@dataclass(frozen=True)
+class EdgeTraversed:
+    stamp_s: float
+    length_m: float  # from the translation encoder over this edge only
+    start: str  # "meet" or "boundary"
+    end: str
+
+
+Event = MeetPointReached | BoundaryReached | EdgeTraversed
+Chooser = Callable[[MeetPointReached], int]
+
+
+def counter_clockwise_next(ev: MeetPointReached) -> int:
+    """The first departure counter-clockwise from the arrival edge."""
+    if ev.arrival_index is None:
+        return 0
+    return (ev.arrival_index + 1) % ev.degree
+
+
+@dataclass
+class _State:
+    behaviour: Behaviour = Behaviour.ACCESS
+    tangent: tuple[float, float] | None = None  # odometry frame, unit
+    armed: bool = False
+    boundary_armed: bool = True
+    since: float = 0.0
+    settle_tries: int = 0
+    depart_dir: float = 0.0
+    depart_from: tuple[float, float] = (0.0, 0.0)
+    node_distance: float | None = None  # encoder distance at the last node
+    node_kind: str = ""
+    last_seen: float = 0.0
+    last_twist: Twist = field(default_factory=Twist)
+
+
+class Tracer:
+    """Runs the laws; ``step`` once per control cycle."""
+
+    def __init__(
+        self,
+        limits: DriveLimits,
+        params: TracerParams | None = None,
+        choose: Chooser = counter_clockwise_next,
+    ) -> None:
+        self.limits = limits
+        self.p = params or TracerParams()
+        self.choose = choose
+        self.sensor = RingSensor()
+        self.s = _State()
+        self.obstacles: list[Obstacle] = []
+
+    @property
+    def behaviour(self) -> Behaviour:
+        return self.s.behaviour
+
+    def step(
+        self, scan: SonarScan, odo: Odometry, status: DriveStatus, now_s: float
+    ) -> tuple[Twist, list[Event]]:
+        obs = self.sensor.update(scan, odo)
+        self.obstacles = obs
+        events: list[Event] = []
+        if status.bumper or status.stall:
+            # Touching something means the laws were fed a lie; stop and re-access.
+            self.s.behaviour = Behaviour.ACCESS
+            self.s.tangent = None
+        v = self._law(obs, odo, now_s, events)
+        turret_off = odo.turret_rad - odo.heading_rad
+        if v is None:
+            twist = Twist(0.0, 0.0, 0.0)
+        elif isinstance(v, Twist):
+            twist = v
+        else:
+            twist = laws.to_twist(v, self.limits, turret_off)
+        self.s.last_twist = twist
+        return twist, events
+
+    # ------------------------------------------------------------------ behaviours
+    def _law(
+        self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]
+    ) -> tuple[float, float] | Twist | None:
+        s, p = self.s, self.p
+        if len(obs) >= 2:
+            s.last_seen = now
+        b = s.behaviour
+        if b is Behaviour.ACCESS:
+            if not obs:
+                return None
+            if laws.equidistant(obs, 2, p.on_edge_tol_m):
+                heading_t = (1.0, 0.0)
+                t = laws.edge_tangent(obs[0], obs[1], heading_t)
+                if t is not None:
+                    s.tangent = _to_odom(t, odo)
+                    s.behaviour = Behaviour.TRACE
+                    s.armed = not laws.equidistant(obs, 3, p.arm_tol_m)
+                    return self._law(obs, odo, now, events)
+            v = laws.access_velocity(obs, p.access_mps)
+            # Backing away is as good as driving away, and spares a half turn.
+            return laws.to_twist(v, self.limits, odo.turret_rad - odo.heading_rad, reverse_ok=True)
+        if b is Behaviour.DEPART:
+            return self._depart(obs, odo)
+        if b is Behaviour.TRACE:
+            return self._trace(obs, odo, now, events)
+        if b in (Behaviour.HOME, Behaviour.SETTLE):
+            return self._home(obs, odo, now, events)
+        return None
+
+    def _trace(
+        self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]
+    ) -> tuple[float, float] | Twist | None:
+        s, p = self.s, self.p
+        if len(obs) < 2:
+            if now - s.last_seen > p.lost_timeout_s:
+                s.behaviour = Behaviour.ACCESS
+                return None
+            return s.last_twist  # coast briefly through a silent patch
+        if not s.armed and not laws.equidistant(obs, 3, p.arm_tol_m):
+            s.armed = True
+        if obs[0].distance_m > p.boundary_clearance_m + 0.1:
+            s.boundary_armed = True
+        if s.boundary_armed and obs[0].distance_m < p.boundary_clearance_m:
+            s.boundary_armed = False  # until the robot is clear of this corner again
+            self._boundary(obs, odo, now, events)
+            return None
+        if obs[1].distance_m - obs[0].distance_m > p.off_edge_m:
+            s.behaviour = Behaviour.ACCESS  # these two are not the edge's obstacles
+            return None
+        if s.armed and laws.equidistant(obs, 3, p.meet_tol_m):
+            s.behaviour = Behaviour.HOME
+            return self._home(obs, odo, now, events)
+        prev = _to_robot(s.tangent, odo) if s.tangent else None
+        out = laws.trace_velocity(obs[0], obs[1], prev, p.alpha_mps, p.beta_per_s)
+        if out is None:
+            return s.last_twist
+        v, t = out
+        s.tangent = _to_odom(t, odo)
+        return v
+
+    def _home(
+        self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]
+    ) -> tuple[float, float] | None:
+        s, p = self.s, self.p
+        target = laws.circumcentre(*obs[:3]) if len(obs) >= 3 else None
+        if target is None or math.hypot(*target) > 1.0:
+            # Not a meet point after all (or a bad estimate): back to tracing.
+            s.behaviour = Behaviour.TRACE
+            s.armed = False
+            return None
+        dist = math.hypot(*target)
+        if s.behaviour is Behaviour.HOME:
+            if dist < p.settle_tol_m:
+                s.behaviour = Behaviour.SETTLE
+                s.since = now
+                return None
+            return laws.homing_velocity(target, p.home_gain, p.home_max_mps)
+        # SETTLE: stand still until every transducer has fired from here, then judge.
+        if now - s.since < p.ring_refresh_s:
+            return None
+        s.settle_tries += 1
+        if dist > p.converge_tol_m and s.settle_tries < 4:
+            s.behaviour = Behaviour.HOME
+            return laws.homing_velocity(target, p.home_gain, p.home_max_mps)
+        self._meet(obs, odo, now, events)
+        return None
+
+    def _meet(self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]) -> None:
+        s, p = self.s, self.p
+        s.settle_tries = 0
+        near = [o for o in obs if o.distance_m - obs[0].distance_m <= p.degree_tol_m]
+        bearings = laws.departure_bearings(near)
+        deps = sorted((odo.heading_rad + b) % TAU for b in bearings)
+        arrival = None
+        if s.tangent is not None:
+            back = math.atan2(-s.tangent[1], -s.tangent[0]) % TAU
+            arrival = min(range(len(deps)), key=lambda k: _angdiff(deps[k], back))
+        base = deps[arrival] if arrival is not None else 0.0
+        rel = tuple(sorted((d - base) % TAU for d in deps))
+        clearance = sum(o.distance_m for o in near) / len(near)
+        ev = MeetPointReached(
+            now, odo.x_m, odo.y_m, clearance, len(deps), tuple(deps), arrival, rel
+        )
+        self._edge_done(odo, now, "meet", events)
+        events.append(ev)
+        k = self.choose(ev)
+        self._start_depart(deps[k], odo)
+
+    def _boundary(
+        self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]
+    ) -> None:
+        s = self.s
+        self._edge_done(odo, now, "boundary", events)
+        events.append(BoundaryReached(now, odo.x_m, odo.y_m, obs[0].distance_m))
+        assert s.tangent is not None
+        back = math.atan2(-s.tangent[1], -s.tangent[0])
+        self._start_depart(back, odo, distance=0.0)
+
+    def _edge_done(self, odo: Odometry, now: float, kind: str, events: list[Event]) -> None:
+        s = self.s
+        if s.node_distance is not None:
+            events.append(EdgeTraversed(now, odo.distance_m - s.node_distance, s.node_kind, kind))
+        s.node_distance = odo.distance_m
+        s.node_kind = kind
+
+    def _start_depart(self, direction: float, odo: Odometry, distance: float | None = None) -> None:
+        s = self.s
+        s.behaviour = Behaviour.DEPART
+        s.depart_dir = direction
+        s.depart_from = (odo.x_m, odo.y_m)
+        s.tangent = (math.cos(direction), math.sin(direction))
+        s.armed = False
+        self._depart_m = self.p.depart_m if distance is None else distance
+
+    def _depart(self, obs: list[Obstacle], odo: Odometry) -> tuple[float, float] | Twist | None:
+        s, p = self.s, self.p
+        err = (s.depart_dir - odo.heading_rad + math.pi) % TAU - math.pi
+        gone = math.hypot(odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1])
+        if gone >= self._depart_m and abs(err) < math.radians(15):
+            s.behaviour = Behaviour.TRACE
+            return None
+        if abs(err) > math.radians(10) and gone < 0.02:
+            return Twist(0.0, laws.steer_rate(err, self.limits), 0.0)
+        return (p.alpha_mps * math.cos(err), p.alpha_mps * math.sin(err))
+
+
+def _to_odom(t: tuple[float, float], odo: Odometry) -> tuple[float, float]:
+    c, s = math.cos(odo.heading_rad), math.sin(odo.heading_rad)
+    return c * t[0] - s * t[1], s * t[0] + c * t[1]
+
+
+def _to_robot(t: tuple[float, float], odo: Odometry) -> tuple[float, float]:
+    c, s = math.cos(odo.heading_rad), math.sin(odo.heading_rad)
+    return c * t[0] + s * t[1], -s * t[0] + c * t[1]
+
+
+def _angdiff(a: float, b: float) -> float:
+    return abs((a - b + math.pi) % TAU - math.pi)
