@@ -52,8 +52,9 @@ merged, and the meet point is refined to the point equidistant to the walls that
 
 Consequences worth knowing
 --------------------------
-- Meet points closer together than ``max(3 * spacing, min_branch_m)`` become one meet point
-  carrying all their outer branches, and branches shorter than ``min_branch_m`` do not
+- Meet points joined by an edge shorter than ``max(3 * spacing, min_branch_m,
+  merge_meet_m)`` (``merge_meet_m`` is 0 by default) become one meet point carrying all
+  their outer branches, and branches shorter than ``min_branch_m`` do not
   exist: the sonar ring cannot tell either apart.
 - A doorway's edge continues into each room, between the two jambs, until it meets the
   room's own GVG at a meet point, however small the angle the jambs subtend there.
@@ -79,6 +80,11 @@ SONAR_MIN_RANGE_M = 0.15
 SONAR_MAX_RANGE_M = 6.5
 DEFAULT_MIN_SEPARATION_DEG = 50.0
 DEFAULT_MIN_CLEARANCE_M = 0.40
+#: Meet points joined by an edge shorter than this are reported as one. Off by default: a
+#: homing robot does tell apart junctions a fraction of a metre apart (measured with
+#: ``tslam trace``); set it to the robot's diameter (0.46 m) for a coarser, map-level view
+#: of the "points close to each other" of section VII-B.
+DEFAULT_MERGE_MEET_M = 0.0
 #: Two wall points whose path along the wall is at most this many times the straight line
 #: between them lie on one bent wall (a flat bend's ratio is 1 / sin(half its angle) < 1.1).
 BENT_WALL_RATIO = 1.5
@@ -142,6 +148,7 @@ class GroundTruthGVG:
     sample_spacing_m: float
     min_branch_m: float
     departure_distance_m: float
+    merge_meet_m: float = DEFAULT_MERGE_MEET_M
     start: tuple[float, float] | None = None
     access_point: tuple[float, float] | None = None
     compute_time_s: float = 0.0
@@ -203,6 +210,7 @@ class GroundTruthGVG:
                 "max_clearance_m": self.max_clearance_m,
                 "sample_spacing_m": self.sample_spacing_m,
                 "min_branch_m": self.min_branch_m,
+                "merge_meet_m": self.merge_meet_m,
                 "departure_distance_m": self.departure_distance_m,
             },
             "start": None if self.start is None else [round(c, 3) for c in self.start],
@@ -247,6 +255,7 @@ def compute_gvg(
     sample_spacing_m: float = DEFAULT_SAMPLE_SPACING_M,
     min_branch_m: float = DEFAULT_MIN_BRANCH_M,
     departure_distance_m: float = DEFAULT_DEPARTURE_DISTANCE_M,
+    merge_meet_m: float = DEFAULT_MERGE_MEET_M,
 ) -> GroundTruthGVG:
     """The ground-truth GVG of ``world`` (see the module docstring for the definition)."""
     if not 0.0 < min_separation_deg < 180.0:
@@ -255,8 +264,8 @@ def compute_gvg(
         raise ValueError("need 0 <= min_clearance_m < max_clearance_m")
     if not sample_spacing_m > 0.0:
         raise ValueError("sample_spacing_m must be positive")
-    if min_branch_m < 0.0 or departure_distance_m <= 0.0:
-        raise ValueError("min_branch_m must be >= 0 and departure_distance_m > 0")
+    if min_branch_m < 0.0 or departure_distance_m <= 0.0 or merge_meet_m < 0.0:
+        raise ValueError("min_branch_m and merge_meet_m must be >= 0 and departure_distance_m > 0")
     t_start = time.perf_counter()
     builder = _Builder(
         world,
@@ -265,6 +274,7 @@ def compute_gvg(
         cmax=float(max_clearance_m),
         spacing=float(sample_spacing_m),
         min_branch=float(min_branch_m),
+        merge_meet=float(merge_meet_m),
     )
     nodes, edges, others, access = builder.run(float(departure_distance_m))
     return GroundTruthGVG(
@@ -278,6 +288,7 @@ def compute_gvg(
         sample_spacing_m=float(sample_spacing_m),
         min_branch_m=float(min_branch_m),
         departure_distance_m=float(departure_distance_m),
+        merge_meet_m=float(merge_meet_m),
         start=(float(world.start.x), float(world.start.y)),
         access_point=access,
         compute_time_s=time.perf_counter() - t_start,
@@ -319,6 +330,7 @@ class _Builder:
         cmax: float,
         spacing: float,
         min_branch: float,
+        merge_meet: float = 0.0,
     ) -> None:
         self.world = world
         self.tan_half = tan_half_sep
@@ -327,7 +339,7 @@ class _Builder:
         self.min_branch = min_branch
         # Junctions that sampling splits are joined by ridges of about one spacing; real meet
         # points this close are one place to a sonar ring anyway.
-        self.merge_len = max(3.0 * spacing, min_branch)
+        self.merge_len = max(3.0 * spacing, min_branch, merge_meet)
         self.segs = np.asarray(world.segments, dtype=float).reshape(-1, 4)
         self.origin = self.segs[:, 0:2].mean(axis=0)
         self.nodes: dict[int, _Node] = {}

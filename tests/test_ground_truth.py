@@ -360,7 +360,7 @@ def test_every_gvg_point_is_equidistant_to_two_separated_walls(seed):
     separate obstacle (~min_separation away in bearing, or joined to the first only the long
     way round along the wall); meet points have three."""
     world = _cluttered_world(seed)
-    g = compute_gvg(world)
+    g = compute_gvg(world, merge_meet_m=0.0)  # the exact medial axis, no resolution merge
     check_graph_consistency(g)
     assert len(g.meet_points) >= 3
     segs = world.segments
@@ -401,3 +401,22 @@ def test_medium_world_is_fast():
     g = compute_gvg(_cluttered_world(4))  # 169 m2
     assert g.compute_time_s < 5.0
     assert g.gvg_length_m > 10.0
+
+
+def test_meet_points_closer_than_the_robot_are_one_place():
+    """Junctions 0.2 m apart are one meet point when merging at the robot's diameter is asked
+    for, carrying all the outer edges, and two by default."""
+    from sim_backend.world_files import load_world
+
+    world = load_world("fig1")
+    exact = compute_gvg(world)
+    merged = compute_gvg(world, merge_meet_m=0.46)
+    check_graph_consistency(merged)
+    m = np.array([[n.x, n.y] for n in exact.meet_points])
+    d = np.hypot(*(m[:, None, :] - m[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    close_pairs = int((d < merged.merge_meet_m).sum()) // 2
+    assert close_pairs >= 1
+    assert len(merged.meet_points) == len(exact.meet_points) - close_pairs
+    degree_sum = sum(n.degree for n in exact.meet_points) - 2 * close_pairs
+    assert sum(n.degree for n in merged.meet_points) == degree_sum

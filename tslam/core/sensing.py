@@ -88,6 +88,7 @@ class SensingParams:
     plateau_m: float = 0.02
     spike_m: float = 0.4
     merge_rad: float = math.radians(50.0)
+    hold_s: float = 1.5  # keep an echo through one silent firing of its transducer
 
 
 class RingSensor:
@@ -99,6 +100,7 @@ class RingSensor:
         self._last_stamp: np.ndarray | None = None
         self._prev_dist: np.ndarray | None = None
         self._held: np.ndarray | None = None
+        self._keep: tuple[np.ndarray, ...] | None = None
 
     def update(self, scan: SonarScan, odo: Odometry) -> list[Obstacle]:
         """Obstacles seen from the pose ``odo``, nearest first."""
@@ -106,15 +108,35 @@ class RingSensor:
         pts = self.echo_points(scan)
         return local_minima(pts, self.p.plateau_m, self.p.merge_rad)
 
+    def _held_echoes(self, scan: SonarScan) -> tuple[np.ndarray, ...]:
+        """The latest echo of each transducer, kept through a silent firing for ``hold_s``:
+        a missed echo (a dropout) should not make a wall vanish for a whole second."""
+        fresh_echo = ~np.isnan(scan.ranges_m)
+        if self._keep is None or len(self._keep[0]) != len(scan):
+            self._keep = tuple(
+                a.copy() for a in (scan.ranges_m, scan.x_m, scan.y_m, scan.yaw_rad, scan.stamps_s)
+            )
+        r, x, y, yaw, t = self._keep
+        for dst, src in zip(
+            (r, x, y, yaw, t),
+            (scan.ranges_m, scan.x_m, scan.y_m, scan.yaw_rad, scan.stamps_s),
+            strict=True,
+        ):
+            dst[fresh_echo] = src[fresh_echo]
+        stale = scan.stamps_s - t > self.p.hold_s
+        r[stale] = np.nan
+        t[stale] = scan.stamps_s[stale]
+        return r, x, y, yaw, t
+
     def echo_points(self, scan: SonarScan) -> np.ndarray:
         """Echo points ``(n, 2)`` in the current robot frame, NaN where there is none."""
         n = len(scan)
-        poses = self.history.at(scan.stamps_s)
+        r, sx, sy, syaw, stamps = self._held_echoes(scan)
+        poses = self.history.at(stamps)
         x0, y0, th0 = self.history.latest()
         # Echo in the robot frame at firing time, on the transducer's axis.
-        r = scan.ranges_m
-        ex = scan.x_m + r * np.cos(scan.yaw_rad)
-        ey = scan.y_m + r * np.sin(scan.yaw_rad)
+        ex = sx + r * np.cos(syaw)
+        ey = sy + r * np.sin(syaw)
         c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
         wx = poses[:, 0] + c * ex - s * ey
         wy = poses[:, 1] + s * ex + c * ey
@@ -124,14 +146,14 @@ class RingSensor:
         # The echo came back at normal incidence: model it as a wall through the echo point,
         # square to the transducer's axis (as it pointed then). Its distance and normal stay
         # right however far the robot moved along it since.
-        axis = scan.yaw_rad + poses[:, 2] - th0
+        axis = syaw + poses[:, 2] - th0
         ux, uy = np.cos(axis), np.sin(axis)
         dist = px * ux + py * uy
         pts = np.column_stack([dist * ux, dist * uy])
         fresh = (
             np.ones(n, dtype=bool)
             if self._last_stamp is None or len(self._last_stamp) != n
-            else scan.stamps_s > self._last_stamp
+            else stamps > self._last_stamp
         )
         if self._held is None or len(self._held) != n:
             self._held = np.zeros(n, dtype=bool)
@@ -150,7 +172,7 @@ class RingSensor:
         # A spike is held once; if the transducer repeats it, it is real.
         self._held = np.where(fresh, spike, self._held)
         self._prev_dist = np.where(fresh, dist, prev)
-        self._last_stamp = scan.stamps_s.copy()
+        self._last_stamp = stamps.copy()
         pts[self._held] = np.nan
         return pts
 

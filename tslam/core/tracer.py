@@ -46,9 +46,10 @@ class TracerParams:
     home_gain: float = 1.0
     home_max_mps: float = 0.15
     boundary_clearance_m: float = 0.45  # the edge has run into its corner
-    depart_m: float = 0.35  # leave a meet point along its departure before tracing
+    depart_m: float = 0.15  # leave a meet point along its departure before tracing
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
+    new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
 
 
 @dataclass(frozen=True)
@@ -102,6 +103,7 @@ class _State:
     depart_from: tuple[float, float] = (0.0, 0.0)
     node_distance: float | None = None  # encoder distance at the last node
     node_kind: str = ""
+    last_meet: tuple[float, float] | None = None  # odometry frame
     last_seen: float = 0.0
     last_twist: Twist = field(default_factory=Twist)
 
@@ -133,9 +135,8 @@ class Tracer:
         self.obstacles = obs
         events: list[Event] = []
         if status.bumper or status.stall:
-            # Touching something means the laws were fed a lie; stop and re-access.
+            # Touching something means the laws were fed a lie; re-access.
             self.s.behaviour = Behaviour.ACCESS
-            self.s.tangent = None
         v = self._law(obs, odo, now_s, events)
         turret_off = odo.turret_rad - odo.heading_rad
         if v is None:
@@ -159,8 +160,9 @@ class Tracer:
             if not obs:
                 return None
             if laws.equidistant(obs, 2, p.on_edge_tol_m):
-                heading_t = (1.0, 0.0)
-                t = laws.edge_tangent(obs[0], obs[1], heading_t)
+                # Keep going the way the robot was tracing, if it was; else along the heading.
+                prev = _to_robot(s.tangent, odo) if s.tangent else (1.0, 0.0)
+                t = laws.edge_tangent(obs[0], obs[1], prev)
                 if t is not None:
                     s.tangent = _to_odom(t, odo)
                     s.behaviour = Behaviour.TRACE
@@ -186,8 +188,8 @@ class Tracer:
                 s.behaviour = Behaviour.ACCESS
                 return None
             return s.last_twist  # coast briefly through a silent patch
-        if not s.armed and not laws.equidistant(obs, 3, p.arm_tol_m):
-            s.armed = True
+        if not s.armed:
+            s.armed = not laws.equidistant(obs, 3, p.arm_tol_m) or self._new_meet_ahead(obs, odo)
         if obs[0].distance_m > p.boundary_clearance_m + 0.1:
             s.boundary_armed = True
         if s.boundary_armed and obs[0].distance_m < p.boundary_clearance_m:
@@ -207,6 +209,20 @@ class Tracer:
         v, t = out
         s.tangent = _to_odom(t, odo)
         return v
+
+    def _new_meet_ahead(self, obs: list[Obstacle], odo: Odometry) -> bool:
+        """Right after a meet point the three closest obstacles stay nearly equidistant; the
+        robot is nearing another meet point only if their circumcentre has moved on, ahead."""
+        s, p = self.s, self.p
+        if len(obs) < 3 or s.last_meet is None or s.tangent is None:
+            return False
+        c = laws.circumcentre(*obs[:3])
+        if c is None:
+            return False
+        cx, cy = _to_odom(c, odo)
+        ahead = cx * s.tangent[0] + cy * s.tangent[1] > 0.0
+        moved = math.hypot(odo.x_m + cx - s.last_meet[0], odo.y_m + cy - s.last_meet[1])
+        return ahead and moved >= p.new_meet_m
 
     def _home(
         self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]
@@ -253,6 +269,7 @@ class Tracer:
         )
         self._edge_done(odo, now, "meet", events)
         events.append(ev)
+        s.last_meet = (odo.x_m, odo.y_m)
         k = self.choose(ev)
         self._start_depart(deps[k], odo)
 
