@@ -117,3 +117,10 @@ def test_console_script_reports_bad_option_without_traceback(tmp_path):
     )  # fmt: skip
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert "--duration must be a positive number" in r.stderr
+
+
+def test_bench_control_prints_step_times(capsys):
+    code, out, _ = run(capsys, "bench", "control", "--json", "--steps", "120")
+    result = json.loads(out)
+    assert code == 0 and result["steps"] == 70
+    assert 0 < result["step_ms_median"] <= result["step_ms_p99"]
