@@ -63,9 +63,9 @@ def test_steering_never_asks_more_than_it_can_brake_from():
 
 def test_to_twist_translates_only_when_facing_the_velocity():
     lim = NOMAD200_LIMITS
-    ahead = laws.to_twist((0.2, 0.0), lim, 0.0)
+    ahead = laws.to_twist((0.2, 0.0), lim)
     assert ahead.v_mps == pytest.approx(0.2) and ahead.steer_radps == 0.0
-    side = laws.to_twist((0.0, 0.2), lim, 0.0)
+    side = laws.to_twist((0.0, 0.2), lim)
     assert side.v_mps == 0.0 and side.steer_radps > 0
-    back = laws.to_twist((-0.2, 0.0), lim, 0.0, reverse_ok=True)
+    back = laws.to_twist((-0.2, 0.0), lim, reverse_ok=True)
     assert back.v_mps == pytest.approx(-0.2)

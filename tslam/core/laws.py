@@ -111,11 +111,7 @@ def departure_bearings(obstacles: Sequence[Obstacle]) -> list[float]:
 
 
 def to_twist(
-    v: Vec,
-    limits: DriveLimits,
-    turret_offset_rad: float,
-    steer_gain: float = 1.5,
-    reverse_ok: bool = False,
+    v: Vec, limits: DriveLimits, steer_gain: float = 1.5, reverse_ok: bool = False
 ) -> Twist:
     """Synchro-drive command for a desired planar velocity ``v`` (robot frame).
 
@@ -123,10 +119,8 @@ def to_twist(
     decelerates at a bounded rate, so a plain proportional command overshoots and spins),
     and translate with the component of ``v`` along the heading, nothing while badly
     misaligned. The turret holds still: a ring that turns while its transducers fire one at
-    a time samples the walls unevenly. ``turret_offset_rad`` is unused but kept for callers
-    that steer the turret themselves.
+    a time samples the walls unevenly.
     """
-    del turret_offset_rad
     speed = math.hypot(*v)
     if speed < 1e-6:
         return Twist(0.0, 0.0, 0.0)

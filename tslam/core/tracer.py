@@ -28,7 +28,6 @@ class Behaviour(enum.Enum):
     HOME = "home"
     SETTLE = "settle"
     DEPART = "depart"
-    STOPPED = "stopped"
 
 
 @dataclass(frozen=True)
@@ -101,6 +100,7 @@ class _State:
     settle_tries: int = 0
     depart_dir: float = 0.0
     depart_from: tuple[float, float] = (0.0, 0.0)
+    depart_m: float = 0.0
     node_distance: float | None = None  # encoder distance at the last node
     node_kind: str = ""
     last_meet: tuple[float, float] | None = None  # odometry frame
@@ -138,13 +138,12 @@ class Tracer:
             # Touching something means the laws were fed a lie; re-access.
             self.s.behaviour = Behaviour.ACCESS
         v = self._law(obs, odo, now_s, events)
-        turret_off = odo.turret_rad - odo.heading_rad
         if v is None:
             twist = Twist(0.0, 0.0, 0.0)
         elif isinstance(v, Twist):
             twist = v
         else:
-            twist = laws.to_twist(v, self.limits, turret_off)
+            twist = laws.to_twist(v, self.limits)
         self.s.last_twist = twist
         return twist, events
 
@@ -170,7 +169,7 @@ class Tracer:
                     return self._law(obs, odo, now, events)
             v = laws.access_velocity(obs, p.access_mps)
             # Backing away is as good as driving away, and spares a half turn.
-            return laws.to_twist(v, self.limits, odo.turret_rad - odo.heading_rad, reverse_ok=True)
+            return laws.to_twist(v, self.limits, reverse_ok=True)
         if b is Behaviour.DEPART:
             return self._depart(obs, odo)
         if b is Behaviour.TRACE:
@@ -297,13 +296,13 @@ class Tracer:
         s.depart_from = (odo.x_m, odo.y_m)
         s.tangent = (math.cos(direction), math.sin(direction))
         s.armed = False
-        self._depart_m = self.p.depart_m if distance is None else distance
+        s.depart_m = self.p.depart_m if distance is None else distance
 
     def _depart(self, obs: list[Obstacle], odo: Odometry) -> tuple[float, float] | Twist | None:
         s, p = self.s, self.p
         err = (s.depart_dir - odo.heading_rad + math.pi) % TAU - math.pi
         gone = math.hypot(odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1])
-        if gone >= self._depart_m and abs(err) < math.radians(15):
+        if gone >= s.depart_m and abs(err) < math.radians(15):
             s.behaviour = Behaviour.TRACE
             return None
         if abs(err) > math.radians(10) and gone < 0.02:
