@@ -11,13 +11,11 @@ import time
 import numpy as np
 
 from sim_backend.simulator import SimParams, SimRobot
-from sim_backend.world import World
+from sim_backend.world import World, point_segments_distance
 
 
 def free_poses(world: World, n: int, clearance_m: float, seed: int) -> np.ndarray:
     """``n`` seeded random poses ``(x, y, theta)`` with at least ``clearance_m`` to any wall."""
-    from sim_backend.world import point_segments_distance
-
     rng = np.random.default_rng(seed)
     xmin, ymin, xmax, ymax = world.bounds
     out: list[np.ndarray] = []

@@ -391,7 +391,7 @@ class _Builder:
         inverse = inverse.reshape(-1)
         self.samples = raw[first_idx]
         self.sample_seg = seg_of[first_idx]
-        arcs = self.world.wall_arcs()
+        arcs = self.world.wall_arcs
         self.arcs = arcs
         self.sample_chain = arcs.chain[self.sample_seg]
         self.sample_arc = arcs.position(self.sample_seg, t[first_idx], length)
@@ -494,9 +494,7 @@ class _Builder:
         mid = 0.5 * (p_lo + p_hi)
         d_gen = np.hypot(*(mid - self.samples[rp[r, 0]]).T)
         d_near, _ = self.sample_tree.query(mid)
-        valid = d_near >= d_gen - 1e-6
-        self.n_invalid_pieces = int((free & ~valid).sum())
-        free &= valid
+        free &= d_near >= d_gen - 1e-6
         return (
             p_lo[free],
             p_hi[free],

@@ -20,6 +20,7 @@ Both expose the same derived geometry, computed once at construction:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -71,13 +72,10 @@ class World:
                 f" the robot needs {robot_radius_m:.3f} m"
             )
 
+    @functools.cached_property
     def wall_arcs(self) -> WallArcs:
         """Where each segment lies along its chain of connected walls (computed once)."""
-        arcs = getattr(self, "_wall_arcs", None)
-        if arcs is None:
-            arcs = chain_walls(self.segments)
-            self._wall_arcs = arcs
-        return arcs
+        return chain_walls(self.segments)
 
     @property
     def width_m(self) -> float:

@@ -372,7 +372,7 @@ def test_every_gvg_point_is_equidistant_to_two_separated_walls(seed):
         return q - x, np.hypot(*(q - x).T)
 
     cos_sep = math.cos(math.radians(g.min_separation_deg - 3.0))
-    arcs = world.wall_arcs()
+    arcs = world.wall_arcs
     lengths = np.hypot(d[:, 0], d[:, 1])
     for e in g.edges:
         for x in resample(e.points, 0.05)[1:]:

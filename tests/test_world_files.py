@@ -532,13 +532,17 @@ json_values = st.recursive(
 )
 
 
-@settings(
+# Seeded, no example database: the same 150 cases on every machine.
+FUZZ = settings(
     max_examples=150,
     derandomize=True,
     database=None,
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
+
+
+@FUZZ
 @given(
     boundary=st.one_of(
         json_values, st.lists(st.lists(st.integers(-3, 3), min_size=2, max_size=2), max_size=7)
@@ -558,13 +562,7 @@ def test_fuzzed_polygon_json_raises_only_world_error(tmp_path, boundary, obstacl
         assert world.free_area_m2 > 0 and math.isfinite(world.start.x)
 
 
-@settings(
-    max_examples=150,
-    derandomize=True,
-    database=None,
-    deadline=None,
-    suppress_health_check=[HealthCheck.function_scoped_fixture],
-)
+@FUZZ
 @given(
     key=st.sampled_from(
         [

@@ -155,23 +155,23 @@ class RingSensor:
             if self._last_stamp is None or len(self._last_stamp) != n
             else stamps > self._last_stamp
         )
+        far = np.where(np.isnan(dist), np.inf, dist)  # no echo: infinitely far
         if self._held is None or len(self._held) != n:
             self._held = np.zeros(n, dtype=bool)
-            self._prev_dist = dist.copy()
+            self._prev_dist = far.copy()
         prev = self._prev_dist
         assert prev is not None
-        left, right = np.roll(dist, 1), np.roll(dist, -1)
-        nan_inf = np.where(np.isnan(dist), np.inf, dist)
+        below = far + self.p.spike_m
         spike = (
             fresh
             & ~self._held
-            & (nan_inf < np.where(np.isnan(prev), np.inf, prev) - self.p.spike_m)
-            & (nan_inf < np.where(np.isnan(left), np.inf, left) - self.p.spike_m)
-            & (nan_inf < np.where(np.isnan(right), np.inf, right) - self.p.spike_m)
+            & (below < prev)
+            & (below < np.roll(far, 1))
+            & (below < np.roll(far, -1))
         )
         # A spike is held once; if the transducer repeats it, it is real.
         self._held = np.where(fresh, spike, self._held)
-        self._prev_dist = np.where(fresh, dist, prev)
+        self._prev_dist = np.where(fresh, far, prev)
         self._last_stamp = stamps.copy()
         pts[self._held] = np.nan
         return pts

@@ -20,7 +20,6 @@ class Wanderer:
         self.limits = limits
         self._escape_until = -math.inf
         self._escape_turn = 1.0
-        self.escapes = 0
 
     def step(
         self, scan: SonarScan, status: DriveStatus, turret_offset_rad: float, now_s: float
@@ -36,7 +35,6 @@ class Wanderer:
             right = open_range[(rel < 0) & (rel > -math.pi)].mean()
             self._escape_turn = 1.0 if left >= right else -1.0
             self._escape_until = now_s + 1.5
-            self.escapes += 1
         if now_s < self._escape_until:
             w = self._escape_turn * lim.steer_radps
             return Twist(-0.1, w, w + align)
