@@ -73,7 +73,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import Voronoi, cKDTree
 
-from sim_backend.world import World
+from sim_backend.world import World, point_segments_distance
 
 RING_RADIUS_M = 0.23
 SONAR_MIN_RANGE_M = 0.15
@@ -1056,8 +1056,7 @@ def _polyline_distance(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
     """Brute-force distance from points to one polyline (small inputs only)."""
     if len(poly) == 1:
         return np.hypot(*(points - poly[0]).T)
-    segs = np.hstack([poly[:-1], poly[1:]])
-    return _point_segment_dist(points[:, None, :], segs[None, :, :]).min(axis=1)
+    return point_segments_distance(points, np.hstack([poly[:-1], poly[1:]]))
 
 
 class _SegmentIndex:
