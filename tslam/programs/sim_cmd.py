@@ -121,17 +121,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def _render(backend: SimBackend, paths: dict[str, list[tuple[float, float]]]) -> str:
     from sim_backend.ground_truth import compute_gvg
-    from sim_backend.svg import SvgCanvas, draw_gvg, draw_world
+    from tslam.programs.pictures import run_canvas
 
     world = backend.world
-    canvas = SvgCanvas(world.bounds)
-    draw_world(canvas, world)
-    draw_gvg(canvas, compute_gvg(world))
-    canvas.polyline(paths["dead_reckoned"], stroke="#d62728", stroke_width=1.5, fill="none")
-    canvas.polyline(paths["true"], stroke="#111111", stroke_width=1.5, fill="none")
-    xmin, _, _, ymax = world.bounds
-    canvas.text(
-        xmin, ymax + 0.2, "black: true path   red: dead reckoning   blue: ground-truth GVG",
-        font_size=12,
-    )  # fmt: skip
-    return canvas.to_string()
+    return run_canvas(world, compute_gvg(world), paths["true"], paths["dead_reckoned"]).to_string()

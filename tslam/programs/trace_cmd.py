@@ -98,17 +98,11 @@ def _render(
     dr_path: list[tuple[float, float]],
     nodes: list[SeenNode],
 ) -> str:
-    from sim_backend.svg import SvgCanvas, draw_gvg, draw_world
+    from tslam.programs.pictures import run_canvas
 
-    world = backend.world
-    canvas = SvgCanvas(world.bounds)
-    draw_world(canvas, world)
-    draw_gvg(canvas, gvg)
-    canvas.polyline(dr_path, stroke="#d62728", stroke_width=1.2, fill="none")
-    canvas.polyline([(x, y) for x, y, _ in path], stroke="#111111", stroke_width=1.2, fill="none")
+    legend = "black: true path   red: dead reckoning   magenta: homed meet points   blue: GVG"
+    true_path = [(x, y) for x, y, _ in path]
+    canvas = run_canvas(backend.world, gvg, true_path, dr_path, legend)
     for n in nodes:
         canvas.circle(n.x, n.y, 0.08, fill="#ff00ff" if n.kind == "meet" else "#00aa00")
-    xmin, _, _, ymax = world.bounds
-    legend = "black: true path   red: dead reckoning   magenta: homed meet points   blue: GVG"
-    canvas.text(xmin, ymax + 0.2, legend, font_size=12)
     return canvas.to_string()
