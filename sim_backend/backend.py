@@ -23,6 +23,7 @@ from hal.types import DriveStatus, Odometry, SonarScan, Twist
 from sim_backend.odometry_model import DRIFT_LEVELS
 from sim_backend.simulator import SimParams, SimRobot
 from sim_backend.world import World, WorldError
+from sim_backend.world_files import load_world
 
 
 class SimClock:
@@ -74,8 +75,6 @@ class SimBackend(Drive, Encoders, SonarRing):
             physics_dt_s=opts.float("physics_dt_s", p.physics_dt_s, lo=0.001, hi=0.2),
         )
         opts.finish()
-        from sim_backend.world_files import load_world
-
         try:
             world = load_world(spec)
             return cls(world, p, seed)
