@@ -1,5 +1,6 @@
-"""``tslam trace`` end to end on fig12 (seeded, sonar noise on, drift paper): the robot
-accesses the GVG, traces edges and homes onto meet points close to the ground truth."""
+"""``tslam trace`` end to end on fig14 (seeded, sonar noise on, drift paper): the robot
+accesses the GVG, traces edges and homes onto meet points close to the ground truth, with
+the degree the ground truth gives, the door junction's four included."""
 
 from __future__ import annotations
 
@@ -11,12 +12,12 @@ from tslam.programs.cli import main
 
 def test_trace_homes_onto_the_true_meet_points_with_the_true_degree(tmp_path, capsys):
     code = main(
-        ["trace", "--world", "fig12", "--edges", "6", "--seed", "1", "--out", str(tmp_path)]
+        ["trace", "--world", "fig14", "--edges", "8", "--seed", "2", "--out", str(tmp_path)]
     )
     capsys.readouterr()
     assert code == 0
     report = json.loads((tmp_path / "trace_report.json").read_text())
-    assert report["complete"] and report["edges_traced"] == 6
+    assert report["complete"] and report["edges_traced"] == 8
     assert report["meet_points_seen"] >= 3
     assert report["meet_point_error_max_m"] <= 0.10
     assert report["degree_match_ratio"] == 1.0

@@ -18,6 +18,7 @@ from hal.interfaces import DriveLimits
 from hal.types import DriveStatus, Odometry, SonarScan, Twist
 from tslam.core import laws
 from tslam.core.sensing import Obstacle, RingSensor
+from tslam.core.sweep import Sweep
 
 TAU = 2.0 * math.pi
 
@@ -28,6 +29,7 @@ class Behaviour(enum.Enum):
     HOME = "home"
     SETTLE = "settle"
     DEPART = "depart"
+    BACKOFF = "backoff"
 
 
 @dataclass(frozen=True)
@@ -36,12 +38,21 @@ class TracerParams:
     beta_per_s: float = 0.8  # pull back onto the edge
     access_mps: float = 0.2
     on_edge_tol_m: float = 0.06  # |d1 - d2| that counts as being on the GVG
-    meet_tol_m: float = 0.12  # d3 - d1 that starts homing
-    arm_tol_m: float = 0.25  # d3 - d1 that re-arms meet detection after leaving a node
+    # The robot passes a meet point some centimetres off it and each distance is good to a few
+    # centimetres, so d3 - d1 rarely falls below 0.15 m while tracing: detection is loose
+    # and the equidistance is checked again once homing has put the robot on the point.
+    meet_tol_m: float = 0.25  # d3 - d1 that starts homing ...
+    meet_radius_m: float = 0.6  # ... when the circumcentre of the three is this close
+    meet_spread_m: float = 0.10  # d3 - d1 at the settled point that makes it a meet point
+    arm_tol_m: float = 0.35  # d3 - d1 that re-arms meet detection after leaving a node
     degree_tol_m: float = 0.10  # d_k - d1 that counts obstacle k at a homed meet point
     settle_tol_m: float = 0.03  # homing stops this close to the estimate
-    converge_tol_m: float = 0.05  # ... and has converged if a fresh ring agrees this well
-    ring_refresh_s: float = 1.0  # time for every transducer to fire again
+    converge_tol_m: float = 0.06  # ... and has converged if the sweep agrees this well
+    # Standing on a meet point the turret turns through one sonar spacing (22.5 degrees)
+    # while each transducer fires four times (5.6 degrees apart): bearings to a few degrees,
+    # and every obstacle answers over four or five samples (see sweep.py).
+    sweep_s: float = 3.9
+    sweep_radps: float = math.radians(22.5) / 3.9
     home_gain: float = 1.0
     home_max_mps: float = 0.15
     boundary_clearance_m: float = 0.45  # the edge has run into its corner
@@ -49,6 +60,7 @@ class TracerParams:
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
+    backoff_m: float = 0.25  # reverse this far from a contact before re-accessing
 
 
 @dataclass(frozen=True)
@@ -98,6 +110,7 @@ class _State:
     boundary_armed: bool = True
     since: float = 0.0
     settle_tries: int = 0
+    sweep: Sweep | None = None
     depart_dir: float = 0.0
     depart_from: tuple[float, float] = (0.0, 0.0)
     depart_m: float = 0.0
@@ -123,6 +136,7 @@ class Tracer:
         self.sensor = RingSensor()
         self.s = _State()
         self.obstacles: list[Obstacle] = []
+        self._scan: SonarScan | None = None
 
     @property
     def behaviour(self) -> Behaviour:
@@ -133,10 +147,15 @@ class Tracer:
     ) -> tuple[Twist, list[Event]]:
         obs = self.sensor.update(scan, odo)
         self.obstacles = obs
+        self._scan = scan
         events: list[Event] = []
-        if status.bumper or status.stall:
-            # Touching something means the laws were fed a lie; re-access.
-            self.s.behaviour = Behaviour.ACCESS
+        if (status.bumper or status.stall) and self.s.behaviour is not Behaviour.BACKOFF:
+            # Touching something means the laws were fed a lie: what the robot touches is
+            # inside the sonar's minimum range, invisible to the ring. Back away the way it
+            # came (the base drove into it), then re-access.
+            self.s.behaviour = Behaviour.BACKOFF
+            self.s.depart_from = (odo.x_m, odo.y_m)
+            self.s.depart_dir = -1.0 if self.s.last_twist.v_mps >= 0.0 else 1.0
         v = self._law(obs, odo, now_s, events)
         if v is None:
             twist = Twist(0.0, 0.0, 0.0)
@@ -172,6 +191,11 @@ class Tracer:
             return laws.to_twist(v, self.limits, reverse_ok=True)
         if b is Behaviour.DEPART:
             return self._depart(obs, odo)
+        if b is Behaviour.BACKOFF:
+            if math.hypot(odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1]) >= p.backoff_m:
+                s.behaviour = Behaviour.ACCESS
+                return None
+            return Twist(0.1 * s.depart_dir, 0.0, 0.0)
         if b is Behaviour.TRACE:
             return self._trace(obs, odo, now, events)
         if b in (Behaviour.HOME, Behaviour.SETTLE):
@@ -198,7 +222,7 @@ class Tracer:
         if obs[1].distance_m - obs[0].distance_m > p.off_edge_m:
             s.behaviour = Behaviour.ACCESS  # these two are not the edge's obstacles
             return None
-        if s.armed and laws.equidistant(obs, 3, p.meet_tol_m):
+        if s.armed and self._meet_near(obs):
             s.behaviour = Behaviour.HOME
             return self._home(obs, odo, now, events)
         prev = _to_robot(s.tangent, odo) if s.tangent else None
@@ -208,6 +232,12 @@ class Tracer:
         v, t = out
         s.tangent = _to_odom(t, odo)
         return v
+
+    def _meet_near(self, obs: list[Obstacle]) -> bool:
+        if not laws.equidistant(obs, 3, self.p.meet_tol_m):
+            return False
+        c = laws.circumcentre(*obs[:3])
+        return c is not None and math.hypot(*c) <= self.p.meet_radius_m
 
     def _new_meet_ahead(self, obs: list[Obstacle], odo: Odometry) -> bool:
         """Right after a meet point the three closest obstacles stay nearly equidistant; the
@@ -225,34 +255,49 @@ class Tracer:
 
     def _home(
         self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]
-    ) -> tuple[float, float] | None:
+    ) -> tuple[float, float] | Twist | None:
         s, p = self.s, self.p
+        if s.behaviour is Behaviour.SETTLE:
+            return self._settle(odo, now, events)
         target = laws.circumcentre(*obs[:3]) if len(obs) >= 3 else None
         if target is None or math.hypot(*target) > 1.0:
             # Not a meet point after all (or a bad estimate): back to tracing.
             s.behaviour = Behaviour.TRACE
             s.armed = False
             return None
-        dist = math.hypot(*target)
-        if s.behaviour is Behaviour.HOME:
-            if dist < p.settle_tol_m:
-                s.behaviour = Behaviour.SETTLE
-                s.since = now
-                return None
-            return laws.homing_velocity(target, p.home_gain, p.home_max_mps)
-        # SETTLE: stand still until every transducer has fired from here, then judge.
-        if now - s.since < p.ring_refresh_s:
-            return None
+        if math.hypot(*target) < p.settle_tol_m:
+            s.behaviour = Behaviour.SETTLE
+            s.since = now
+            s.sweep = Sweep(start_s=now)
+            return Twist(0.0, 0.0, p.sweep_radps)
+        return laws.homing_velocity(target, p.home_gain, p.home_max_mps)
+
+    def _settle(self, odo: Odometry, now: float, events: list[Event]) -> Twist | None:
+        """Stand still and sweep the turret, then judge the meet point on the sweep."""
+        s, p = self.s, self.p
+        assert s.sweep is not None and self._scan is not None
+        s.sweep.add(self._scan)
+        if now - s.since < p.sweep_s:
+            return Twist(0.0, 0.0, p.sweep_radps)
         s.settle_tries += 1
-        if dist > p.converge_tol_m and s.settle_tries < 4:
+        obs = s.sweep.obstacles()
+        s.sweep = None
+        swept = laws.circumcentre(*obs[:3]) if len(obs) >= 3 else None
+        if swept is not None and math.hypot(*swept) > p.converge_tol_m and s.settle_tries < 3:
             s.behaviour = Behaviour.HOME
-            return laws.homing_velocity(target, p.home_gain, p.home_max_mps)
+            return None
+        s.settle_tries = 0
+        if swept is None or not laws.equidistant(obs, 3, p.meet_spread_m):
+            # Three obstacles came close to equidistant but never met: the edge goes on.
+            s.behaviour = Behaviour.TRACE
+            s.armed = False
+            s.last_meet = _add(_to_odom(swept, odo), odo) if swept else (odo.x_m, odo.y_m)
+            return None
         self._meet(obs, odo, now, events)
         return None
 
     def _meet(self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]) -> None:
         s, p = self.s, self.p
-        s.settle_tries = 0
         near = [o for o in obs if o.distance_m - obs[0].distance_m <= p.degree_tol_m]
         bearings = laws.departure_bearings(near)
         deps = sorted((odo.heading_rad + b) % TAU for b in bearings)
@@ -313,6 +358,10 @@ class Tracer:
 def _to_odom(t: tuple[float, float], odo: Odometry) -> tuple[float, float]:
     c, s = math.cos(odo.heading_rad), math.sin(odo.heading_rad)
     return c * t[0] - s * t[1], s * t[0] + c * t[1]
+
+
+def _add(v: tuple[float, float], odo: Odometry) -> tuple[float, float]:
+    return odo.x_m + v[0], odo.y_m + v[1]
 
 
 def _to_robot(t: tuple[float, float], odo: Odometry) -> tuple[float, float]:

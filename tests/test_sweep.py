@@ -1,0 +1,108 @@
+"""The turret sweep at a standstill: Fig. 4's rules on a dense circular array, the bent-wall
+merge, and the sweep run on the simulated robot where the ring alone misreads bearings."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hal.types import Twist
+from sim_backend.backend import SimBackend
+from sim_backend.builtin_worlds import builtin_world
+from sim_backend.world import PolygonWorld, StartPose
+from tslam.core.sweep import Sweep, sweep_minima
+
+
+def _ring(step_deg: float = 5.0) -> np.ndarray:
+    return np.radians(np.arange(0.0, 360.0, step_deg))
+
+
+def _bearings(obs) -> list[float]:
+    return sorted(round(math.degrees(o.bearing_rad) % 360.0) for o in obs)
+
+
+def test_a_plateau_is_one_obstacle_at_its_middle():
+    b = _ring()
+    d = np.full(len(b), np.inf)
+    d[(b >= math.radians(80)) & (b <= math.radians(110))] = 1.0  # a wall heard over 30 deg
+    obs = sweep_minima(b, d)
+    assert len(obs) == 1
+    assert math.degrees(obs[0].bearing_rad) == pytest.approx(95.0)
+    assert obs[0].distance_m == 1.0
+    away = (-math.cos(math.radians(95)), -math.sin(math.radians(95)))
+    assert (obs[0].gx, obs[0].gy) == pytest.approx(away)
+
+
+def test_a_slope_next_to_a_lower_run_is_not_an_obstacle():
+    b = _ring()
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 80) & (deg <= 100)] = 1.0
+    d[(deg > 100) & (deg <= 140)] = 1.0 + 0.02 * (deg[(deg > 100) & (deg <= 140)] - 100)
+    assert _bearings(sweep_minima(b, d)) == [90]
+
+
+def test_stray_echoes_shorter_than_the_beam_are_ignored():
+    b = _ring()
+    d = np.full(len(b), np.inf)
+    d[18] = 0.8  # one sample: a side lobe or multipath
+    d[(b >= math.radians(200)) & (b <= math.radians(225))] = 1.2
+    assert _bearings(sweep_minima(b, d)) == [212]
+
+
+def test_door_jambs_close_in_bearing_stay_two_obstacles():
+    # Two jamb corners 40 deg apart with the corridor behind the door seen between them.
+    b = _ring()
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 330) & (deg <= 350)] = 1.4
+    d[(deg > 350) | (deg < 10)] = 3.7
+    d[(deg >= 10) & (deg <= 30)] = 1.4
+    assert _bearings(sweep_minima(b, d)) == [20, 340]
+
+
+def test_one_bent_wall_close_in_bearing_is_one_obstacle():
+    # Two faces of a flat concave bend, 40 deg apart, the bend's vertex slightly farther.
+    b = _ring()
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 330) & (deg <= 350)] = 1.40
+    d[(deg > 350) | (deg < 10)] = 1.52
+    d[(deg >= 10) & (deg <= 30)] = 1.42
+    obs = sweep_minima(b, d)
+    assert len(obs) == 1 and round(math.degrees(obs[0].bearing_rad) % 360) == 340
+    # Far apart in bearing, the same two faces are two obstacles.
+    d2 = np.full(len(b), np.inf)
+    d2[(deg >= 300) & (deg <= 320)] = 1.40
+    d2[(deg >= 40) & (deg <= 60)] = 1.42
+    assert len(sweep_minima(b, d2)) == 2
+
+
+def test_no_echo_anywhere_is_no_obstacle():
+    b = _ring()
+    assert sweep_minima(b, np.full(len(b), np.inf)) == []
+
+
+def test_the_sweep_on_the_robot_finds_four_door_and_wall_obstacles_at_fig14s_junction():
+    # Fig. 14's degree-4 meet point by the lab's right door: a wall, two jambs 41 deg apart
+    # and a table corner, all 1.41 m away. From any heading the sweep finds all four.
+    fig14 = builtin_world("fig14")
+    for heading_deg in (0, 50, 130, 250):
+        start = StartPose(9.18, 6.09, math.radians(heading_deg))
+        world = PolygonWorld("fig14", fig14.boundary, fig14.obstacles, start, source="test")
+        backend = SimBackend(world, seed=heading_deg)
+        with backend:
+            sweep = Sweep(start_s=backend.clock.now())
+            backend.command(Twist(0.0, 0.0, math.radians(22.5) / 3.9))
+            while backend.clock.now() < 3.9:
+                backend.clock.sleep(0.1)
+                sweep.add(backend.scan())
+        near = [o for o in sweep.obstacles() if o.distance_m < 1.55]
+        world_bearings = sorted(
+            (math.degrees(o.bearing_rad) + heading_deg) % 360.0 for o in near
+        )
+        assert len(near) == 4, (heading_deg, world_bearings)
+        for got, want in zip(world_bearings, (21.0, 90.0, 231.0, 340.0), strict=True):
+            assert abs(got - want) < 8.0, (heading_deg, world_bearings)

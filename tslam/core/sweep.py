@@ -1,0 +1,178 @@
+"""A dense look around from a standstill: the turret swept through one sonar spacing.
+
+Sixteen transducers 22.5 degrees apart place a wall's bearing only to within +/-11 degrees:
+a flat wall answers only the transducer whose beam holds its normal, wherever that normal
+falls in the beam. Two walls 45 degrees apart then show 23 to 68 degrees apart, so whether
+the ring resolves them as two obstacles (and a meet point sits between them) would depend
+on the robot's heading. At a meet point the robot is standing still anyway, so it turns the
+turret slowly through one spacing (the Nomad's turret turns independently of the wheels)
+and collects every firing. A flat wall then echoes over the whole +/-12.5 degree span of
+axes that contain its normal, at one distance; a convex corner likewise over the span
+that contains its bearing. By Fig. 4's rule for equal adjacent readings the obstacle lies in
+the middle of that plateau, which is its true direction to a few degrees.
+
+``sweep_minima`` applies the Fig. 4 rules to the dense, irregular circular array: a run of
+readings within noise of its lowest one is one obstacle, lying at the run's middle; a run
+that borders a lower reading is a slope, not an obstacle; no echo separates runs.
+
+Two runs closer than ``merge_rad`` in bearing are one obstacle only where they could be one
+bent wall: every reading between them is no echo (a side lobe or a dropout split the
+plateau) or no deeper than ``bend_ratio`` times their distance (the vertex of a flat
+concave bend). A deeper reading between them, such as a doorway's view into the next room,
+makes them two obstacles at any angle: the ground truth's bent-wall rule, seen by sonar.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from hal.types import SonarScan
+from tslam.core.sensing import Obstacle
+
+
+#: The ground truth joins two points of one bent wall closer than 50 degrees; the sweep's
+#: bearings are good to about 5 degrees each, so it joins up to 60 lest a 45-degree bend
+#: (fig12's cut corner) show as a meet point from some headings.
+BENT_WALL_MERGE_RAD = math.radians(60.0)
+
+
+class Sweep:
+    """Collects the firings of a standing robot while its turret turns."""
+
+    def __init__(self, start_s: float = -math.inf) -> None:
+        self.start_s = start_s  # firings before this were taken on the move
+        self._last: np.ndarray | None = None
+        self._bearing: list[float] = []
+        self._dist: list[float] = []
+
+    def add(self, scan: SonarScan) -> None:
+        """Take the firings of ``scan`` not seen before (robot frame; the robot is still)."""
+        stamps = scan.stamps_s
+        new = stamps >= self.start_s
+        if self._last is not None and len(self._last) == len(scan):
+            new &= stamps > self._last
+        self._last = stamps.copy()
+        r = np.where(np.isnan(scan.ranges_m), np.inf, scan.ranges_m)
+        ex = scan.x_m + np.where(np.isfinite(r), r, 0.0) * np.cos(scan.yaw_rad)
+        ey = scan.y_m + np.where(np.isfinite(r), r, 0.0) * np.sin(scan.yaw_rad)
+        for i in np.flatnonzero(new):
+            self._bearing.append(float(scan.yaw_rad[i]))
+            self._dist.append(float(math.hypot(ex[i], ey[i])) if math.isfinite(r[i]) else math.inf)
+
+    @property
+    def samples(self) -> int:
+        return len(self._bearing)
+
+    def obstacles(self, merge_rad: float = BENT_WALL_MERGE_RAD) -> list[Obstacle]:
+            return sweep_minima(np.asarray(self._bearing), np.asarray(self._dist), merge_rad)
+
+
+def sweep_minima(
+    bearing_rad: np.ndarray,
+    distance_m: np.ndarray,
+    merge_rad: float = BENT_WALL_MERGE_RAD,
+    tol_m: float = 0.06,
+    tol_rel: float = 0.03,
+    bend_ratio: float = 1.25,
+    min_samples: int = 3,
+) -> list[Obstacle]:
+    """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
+
+    A reading within ``tol_m + tol_rel * d`` of a run's lowest reading ``d`` belongs to the
+    run (the sonar's noise is about 1 cm + 1 %, so this is some three deviations); runs
+    are grown from the lowest reading up.
+    """
+    n = len(bearing_rad)
+    if n < 3:
+        return []
+    order = np.argsort(np.mod(bearing_rad, 2 * math.pi), kind="stable")
+    b = np.mod(bearing_rad[order], 2 * math.pi)
+    d = distance_m[order]
+    claimed = np.full(n, -1)
+    runs: list[tuple[float, float, float, int, int]] = []  # distance, mid, _, lo, hi
+    for run_id, i in enumerate(np.argsort(d, kind="stable")):
+        if not math.isfinite(d[i]):
+            break
+        if claimed[i] >= 0:
+            continue
+        limit = d[i] + tol_m + tol_rel * d[i]
+        lo = hi = int(i)
+        slope = False
+        while hi - lo + 1 < n:
+            k = (hi + 1) % n
+            if claimed[k] >= 0:
+                slope = True
+                break
+            if d[k] > limit:
+                break
+            hi += 1
+        while hi - lo + 1 < n:
+            k = (lo - 1) % n
+            if claimed[k] >= 0:
+                slope = True
+                break
+            if d[k] > limit:
+                break
+            lo -= 1
+        idx = np.array([k % n for k in range(lo, hi + 1)])
+        claimed[idx] = run_id
+        if slope or len(idx) == n or len(idx) < min_samples:
+            # A real wall or corner answers over the whole beam, several samples of a sweep;
+            # a run of one or two is a side lobe's or a multipath's stray echo.
+            continue
+        # The middle of the plateau: the mean of its end bearings, unwrapped across 0.
+        first, last = b[idx[0]], b[idx[-1]]
+        span = (last - first) % (2 * math.pi)
+        mid = first + 0.5 * span
+        runs.append((float(np.median(d[idx])), mid, 0.0, lo % n, hi % n))
+    if not runs:
+        return []
+    # Neighbouring runs on one bent wall join, in chains (a side-lobe fragment, the wall,
+    # the next face of the bend); the nearest run of a chain stands for it.
+    runs.sort(key=lambda r: r[1])
+    m = len(runs)
+    parent = list(range(m))
+
+    def root(k: int) -> int:
+        while parent[k] != k:
+            k = parent[k]
+        return k
+
+    for k in range(m if m > 2 else m - 1):
+        a, c = runs[k], runs[(k + 1) % m]
+        if _one_wall(a, c, d, merge_rad, bend_ratio):
+            parent[root((k + 1) % m)] = root(k)
+    best: dict[int, tuple[float, float, float, int, int]] = {}
+    for k, run in enumerate(runs):
+        r = root(k)
+        if r not in best or run[0] < best[r][0]:
+            best[r] = run
+    out = []
+    for dist, mid, _, _, _ in sorted(best.values()):
+        ux, uy = math.cos(mid), math.sin(mid)
+        out.append(Obstacle(dist, ux * dist, uy * dist, -ux, -uy, math.atan2(uy, ux)))
+    return out
+
+
+def _one_wall(
+    a: tuple[float, float, float, int, int],
+    c: tuple[float, float, float, int, int],
+    d: np.ndarray,
+    merge_rad: float,
+    bend_ratio: float,
+) -> bool:
+    """``c`` follows ``a`` counter-clockwise; could the two be one bent wall?"""
+    if (c[1] - a[1]) % (2 * math.pi) >= merge_rad:
+        return False
+    if max(a[0], c[0]) > bend_ratio * min(a[0], c[0]):
+        return False  # a flat bend's two faces are about equally far
+    n = len(d)
+    k, end = (a[4] + 1) % n, c[3]
+    limit = bend_ratio * max(a[0], c[0])
+    while k != end:
+        if math.isfinite(d[k]) and d[k] > limit:
+            return False
+        k = (k + 1) % n
+    return True
