@@ -31,7 +31,6 @@ import numpy as np
 from hal.types import SonarScan
 from tslam.core.sensing import Obstacle
 
-
 #: The ground truth joins two points of one bent wall closer than 50 degrees; the sweep's
 #: bearings are good to about 5 degrees each, so it joins up to 60 lest a 45-degree bend
 #: (fig12's cut corner) show as a meet point from some headings.
