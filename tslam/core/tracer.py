@@ -154,6 +154,7 @@ class Tracer:
             # inside the sonar's minimum range, invisible to the ring. Back away the way it
             # came (the base drove into it), then re-access.
             self.s.behaviour = Behaviour.BACKOFF
+            self.s.since = now_s
             self.s.depart_from = (odo.x_m, odo.y_m)
             self.s.depart_dir = -1.0 if self.s.last_twist.v_mps >= 0.0 else 1.0
         v = self._law(obs, odo, now_s, events)
@@ -192,7 +193,9 @@ class Tracer:
         if b is Behaviour.DEPART:
             return self._depart(obs, odo)
         if b is Behaviour.BACKOFF:
-            if math.hypot(odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1]) >= p.backoff_m:
+            gone = math.hypot(odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1])
+            # Bounded in time too: backing into something else must not hold the robot here.
+            if gone >= p.backoff_m or now - s.since > 4.0 * p.backoff_m / 0.1:
                 s.behaviour = Behaviour.ACCESS
                 return None
             return Twist(0.1 * s.depart_dir, 0.0, 0.0)
