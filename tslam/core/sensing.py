@@ -221,10 +221,10 @@ def local_minima(
             )
         )
     out.sort(key=lambda o: o.distance_m)
-    return merge_close_bearings(out, merge_rad)
+    return _merge_split_walls(out, merge_rad)
 
 
-def merge_close_bearings(obstacles: list[Obstacle], merge_rad: float) -> list[Obstacle]:
+def _merge_split_walls(obstacles: list[Obstacle], merge_rad: float) -> list[Obstacle]:
     """A wall heard by two transducers with a silent one between them shows as two minima a
     few tens of degrees apart; the ring cannot resolve obstacles that close in bearing
     (the ground truth's separation rule), so the nearer one stands for both."""

@@ -60,10 +60,6 @@ class Sweep:
             self._bearing.append(float(scan.yaw_rad[i]))
             self._dist.append(float(math.hypot(ex[i], ey[i])) if math.isfinite(r[i]) else math.inf)
 
-    @property
-    def samples(self) -> int:
-        return len(self._bearing)
-
     def obstacles(self, merge_rad: float = BENT_WALL_MERGE_RAD) -> list[Obstacle]:
             return sweep_minima(np.asarray(self._bearing), np.asarray(self._dist), merge_rad)
 
@@ -90,7 +86,7 @@ def sweep_minima(
     b = np.mod(bearing_rad[order], 2 * math.pi)
     d = distance_m[order]
     claimed = np.full(n, -1)
-    runs: list[tuple[float, float, float, int, int]] = []  # distance, mid, _, lo, hi
+    runs: list[tuple[float, float, int, int]] = []  # distance, mid bearing, lo, hi
     for run_id, i in enumerate(np.argsort(d, kind="stable")):
         if not math.isfinite(d[i]):
             break
@@ -125,7 +121,7 @@ def sweep_minima(
         first, last = b[idx[0]], b[idx[-1]]
         span = (last - first) % (2 * math.pi)
         mid = first + 0.5 * span
-        runs.append((float(np.median(d[idx])), mid, 0.0, lo % n, hi % n))
+        runs.append((float(np.median(d[idx])), mid, lo % n, hi % n))
     if not runs:
         return []
     # Neighbouring runs on one bent wall join, in chains (a side-lobe fragment, the wall,
@@ -143,21 +139,21 @@ def sweep_minima(
         a, c = runs[k], runs[(k + 1) % m]
         if _one_wall(a, c, d, merge_rad, bend_ratio):
             parent[root((k + 1) % m)] = root(k)
-    best: dict[int, tuple[float, float, float, int, int]] = {}
+    best: dict[int, tuple[float, float, int, int]] = {}
     for k, run in enumerate(runs):
         r = root(k)
         if r not in best or run[0] < best[r][0]:
             best[r] = run
     out = []
-    for dist, mid, _, _, _ in sorted(best.values()):
+    for dist, mid, _, _ in sorted(best.values()):
         ux, uy = math.cos(mid), math.sin(mid)
         out.append(Obstacle(dist, ux * dist, uy * dist, -ux, -uy, math.atan2(uy, ux)))
     return out
 
 
 def _one_wall(
-    a: tuple[float, float, float, int, int],
-    c: tuple[float, float, float, int, int],
+    a: tuple[float, float, int, int],
+    c: tuple[float, float, int, int],
     d: np.ndarray,
     merge_rad: float,
     bend_ratio: float,
@@ -168,7 +164,7 @@ def _one_wall(
     if max(a[0], c[0]) > bend_ratio * min(a[0], c[0]):
         return False  # a flat bend's two faces are about equally far
     n = len(d)
-    k, end = (a[4] + 1) % n, c[3]
+    k, end = (a[3] + 1) % n, c[2]
     limit = bend_ratio * max(a[0], c[0])
     while k != end:
         if math.isfinite(d[k]) and d[k] > limit:

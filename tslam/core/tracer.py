@@ -60,7 +60,8 @@ class TracerParams:
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
-    backoff_m: float = 0.25  # reverse this far from a contact before re-accessing
+    backoff_m: float = 0.25  # reverse this far from a contact before re-accessing ...
+    backoff_mps: float = 0.1  # ... at this speed, for at most four times as long as it takes
 
 
 @dataclass(frozen=True)
@@ -195,10 +196,10 @@ class Tracer:
         if b is Behaviour.BACKOFF:
             gone = math.hypot(odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1])
             # Bounded in time too: backing into something else must not hold the robot here.
-            if gone >= p.backoff_m or now - s.since > 4.0 * p.backoff_m / 0.1:
+            if gone >= p.backoff_m or now - s.since > 4.0 * p.backoff_m / p.backoff_mps:
                 s.behaviour = Behaviour.ACCESS
                 return None
-            return Twist(0.1 * s.depart_dir, 0.0, 0.0)
+            return Twist(p.backoff_mps * s.depart_dir, 0.0, 0.0)
         if b is Behaviour.TRACE:
             return self._trace(obs, odo, now, events)
         if b in (Behaviour.HOME, Behaviour.SETTLE):
