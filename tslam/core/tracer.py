@@ -74,6 +74,7 @@ class MeetPointReached:
     departures_rad: tuple[float, ...]  # odometry frame, counter-clockwise
     arrival_index: int | None  # which departure the robot came in by
     relative_rad: tuple[float, ...]  # departure angles measured from the arrival edge
+    edge_length_m: float | None = None  # encoder length of the edge that ended here
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,7 @@ class BoundaryReached:
     x_m: float
     y_m: float
     clearance_m: float
+    edge_length_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -312,10 +314,10 @@ class Tracer:
         base = deps[arrival] if arrival is not None else 0.0
         rel = tuple(sorted((d - base) % TAU for d in deps))
         clearance = sum(o.distance_m for o in near) / len(near)
+        length = self._edge_done(odo, now, "meet", events)
         ev = MeetPointReached(
-            now, odo.x_m, odo.y_m, clearance, len(deps), tuple(deps), arrival, rel
+            now, odo.x_m, odo.y_m, clearance, len(deps), tuple(deps), arrival, rel, length
         )
-        self._edge_done(odo, now, "meet", events)
         events.append(ev)
         s.last_meet = (odo.x_m, odo.y_m)
         k = self.choose(ev)
@@ -325,18 +327,23 @@ class Tracer:
         self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]
     ) -> None:
         s = self.s
-        self._edge_done(odo, now, "boundary", events)
-        events.append(BoundaryReached(now, odo.x_m, odo.y_m, obs[0].distance_m))
+        length = self._edge_done(odo, now, "boundary", events)
+        events.append(BoundaryReached(now, odo.x_m, odo.y_m, obs[0].distance_m, length))
         assert s.tangent is not None
         back = math.atan2(-s.tangent[1], -s.tangent[0])
         self._start_depart(back, odo, distance=0.0)
 
-    def _edge_done(self, odo: Odometry, now: float, kind: str, events: list[Event]) -> None:
+    def _edge_done(
+        self, odo: Odometry, now: float, kind: str, events: list[Event]
+    ) -> float | None:
         s = self.s
+        length = None
         if s.node_distance is not None:
-            events.append(EdgeTraversed(now, odo.distance_m - s.node_distance, s.node_kind, kind))
+            length = odo.distance_m - s.node_distance
+            events.append(EdgeTraversed(now, length, s.node_kind, kind))
         s.node_distance = odo.distance_m
         s.node_kind = kind
+        return length
 
     def _start_depart(self, direction: float, odo: Odometry, distance: float | None = None) -> None:
         s = self.s

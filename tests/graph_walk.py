@@ -1,0 +1,95 @@
+"""A true GVG as a graph, walked by the explorer's decisions without a simulator.
+
+Each ``choose`` of the explorer picks a departure index; the walker follows that edge of the
+true graph and reports the next node exactly as the tracer would (departure bearings in the
+drifting odometry frame, the arrival index, the edge's encoder length), so localization and
+the arbiter can be tested on graphs built to be hard, fast and deterministically.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass, field
+
+from tslam.core.explorer import Explorer
+from tslam.core.tracer import BoundaryReached, MeetPointReached
+
+TAU = 2 * math.pi
+
+
+@dataclass
+class TrueGraph:
+    """Nodes: id -> (kind, clearance, absolute departure bearings ascending, x, y).
+    Edges: (node, port) -> (node, port, length)."""
+
+    nodes: dict[str, tuple[str, float, tuple[float, ...], float, float]] = field(
+        default_factory=dict
+    )
+    ends: dict[tuple[str, int], tuple[str, int, float]] = field(default_factory=dict)
+
+    def meet(self, name: str, x: float, y: float, bearings_deg: list[float], clr: float = 1.0):
+        deps = tuple(sorted(math.radians(b) % TAU for b in bearings_deg))
+        self.nodes[name] = ("meet", clr, deps, x, y)
+
+    def boundary(self, name: str, x: float, y: float) -> None:
+        self.nodes[name] = ("boundary", 0.4, (0.0,), x, y)
+
+    def port(self, name: str, bearing_deg: float) -> int:
+        deps = self.nodes[name][2]
+        b = math.radians(bearing_deg) % TAU
+        return min(range(len(deps)), key=lambda i: abs((deps[i] - b + math.pi) % TAU - math.pi))
+
+    def edge(self, a: str, bearing_a: float, b: str, bearing_b: float, length: float) -> None:
+        pa = self.port(a, bearing_a)
+        pb = 0 if self.nodes[b][0] == "boundary" else self.port(b, bearing_b)
+        self.ends[(a, pa)] = (b, pb, length)
+        self.ends[(b, pb)] = (a, pa, length)
+
+
+def walk(
+    graph: TrueGraph,
+    explorer: Explorer,
+    start: str,
+    arrival_port: int | None = None,
+    max_arrivals: int = 200,
+    drift_deg_per_edge: float = 3.0,
+    noise: float = 0.0,
+    seed: int = 1,
+) -> list[str]:
+    """Run the explorer over ``graph`` from ``start``; returns the true nodes visited."""
+    rng = random.Random(seed)
+    heading_err = 0.0
+    at, came_by, length = start, arrival_port, None
+    visited = []
+    where = [graph.nodes[at][3], graph.nodes[at][4]]  # what the truth callback reports
+    explorer.truth = lambda: (where[0], where[1])
+    for _ in range(max_arrivals):
+        _, clr, deps, x, y = graph.nodes[at]
+        where[:] = [x, y]
+        visited.append(at)
+        seen = tuple((d - heading_err) % TAU for d in deps)
+        order = sorted(range(len(seen)), key=lambda i: seen[i])
+        obs = tuple(seen[i] for i in order)
+        arr = None if came_by is None else order.index(came_by)
+        ev = MeetPointReached(
+            0.0, x, y, clr + rng.uniform(-noise, noise), len(obs), obs, arr,
+            tuple((d - obs[arr or 0]) % TAU for d in obs), length,
+        )  # fmt: skip
+        explorer._now += 1.0
+        k = explorer._choose(ev)
+        if explorer.done:
+            break
+        port = order[k]
+        nxt, nport, length = graph.ends[(at, port)]
+        length *= 1.0 + rng.uniform(-noise, noise)
+        heading_err += math.radians(drift_deg_per_edge)
+        if graph.nodes[nxt][0] == "boundary":
+            bx, by = graph.nodes[nxt][3], graph.nodes[nxt][4]
+            where[:] = [bx, by]
+            explorer._on_boundary(BoundaryReached(0.0, bx, by, 0.4, length))
+            visited.append(nxt)
+            came_by = port  # straight back
+        else:
+            at, came_by = nxt, nport
+    return visited

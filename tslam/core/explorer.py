@@ -1,0 +1,567 @@
+"""The exploration arbiter (section III-D with section V): build the topological map while
+tracing the GVG, and always know which node of it the robot is at.
+
+A hybrid controller over the tracer. At every meet point the tracer asks which departure to
+take; the arbiter first decides where the robot is:
+
+* it was following a known edge (a planned path, section V-B): the node at its end is
+  expected, and confirmed by signature, arrival port and edge length. A meet point that shows
+  up halfway along the edge (a weak one, section VII-B) is passed through; arriving one node
+  further than expected (the robot homed past a weak meet point) is recognised;
+* it was exploring a new edge: the meet point goes into the map, and if it looks like an old
+  one, localization starts (``tslam.core.localize``): the arbiter then picks the departures that
+  test the hypotheses, merges when one is proven, and records an ambiguity when none can be;
+* it does not know where it came from (it lost its edge, or an expected node was not there):
+  the node goes into the map unattached and every old node that looks like it is a hypothesis.
+
+Then it picks the next departure: a test if hypotheses are open, else the next step of a
+planned path, else an unexplored departure here, else a path in the graph to the nearest node
+that has one (backtracking is always a path in the graph, never x, y waypoints). When no
+departure is left the robot stops.
+
+Pure like the tracer: time comes in, nothing is read from a clock. The optional ``truth``
+callback is for scoring in simulation only; it is stored on new nodes and never read.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import networkx as nx
+
+from hal.interfaces import DriveLimits
+from hal.types import DriveStatus, Odometry, SonarScan, Twist
+from tslam.core.localize import (
+    Hypotheses,
+    Hypothesis,
+    Tolerances,
+    arrival_matches,
+    candidates,
+    predict,
+    separating_port,
+)
+from tslam.core.signature import Signature, rotations
+from tslam.core.topomap import MapError, Step, TopoMap
+from tslam.core.tracer import (
+    Behaviour,
+    BoundaryReached,
+    Event,
+    MeetPointReached,
+    Tracer,
+    TracerParams,
+)
+
+TAU = 2.0 * math.pi
+
+
+class Mode(enum.Enum):
+    EXPLORE = "explore"  # tracing a new edge
+    NAVIGATE = "navigate"  # following a known edge of a planned path
+    DISAMBIGUATE = "disambiguate"  # testing localization hypotheses
+    LOST = "lost"  # off the graph, or the expected node was not there
+    DONE = "done"
+
+
+@dataclass(frozen=True)
+class ExplorerParams:
+    tol: Tolerances = field(default_factory=Tolerances)
+    merge_evidence: int = 2  # confirmed predictions that prove a single hypothesis
+    weak_through_rad: float = math.radians(40.0)  # "straight on" at a weak meet point
+    # The tracer may leave its edge for a moment (a silent patch, a bump) and re-access it.
+    # Back on an edge within this (dead-reckoned, so short-range) distance, it is the same one.
+    rejoin_m: float = 1.0
+    # Homed back onto the point just left (the edge could not be held near the junction):
+    # recognised by dead reckoning, which is good over a metre, and retried once.
+    bounce_m: float = 0.25
+    bounce_length_m: float = 1.5
+    bounce_retries: int = 1
+
+
+@dataclass(frozen=True)
+class MergeRecord:
+    """Which node became which; the truths are copied for scoring only."""
+
+    stamp_s: float
+    pairs: tuple[tuple[int, int, tuple[float, float] | None, tuple[float, float] | None], ...]
+
+
+@dataclass(frozen=True)
+class Note:
+    """Something worth telling the operator (progress lines, the link's event stream)."""
+
+    stamp_s: float
+    text: str
+
+
+class Explorer:
+    """``step`` once per control cycle, like the tracer; read ``map``, ``mode``, ``notes``."""
+
+    def __init__(
+        self,
+        limits: DriveLimits,
+        tracer_params: TracerParams | None = None,
+        params: ExplorerParams | None = None,
+        truth: Callable[[], tuple[float, float]] | None = None,
+        tmap: TopoMap | None = None,
+    ) -> None:
+        self.p = params or ExplorerParams()
+        self.map = tmap or TopoMap()
+        self.tracer = Tracer(limits, tracer_params, choose=self._choose)
+        self.hyps = Hypotheses()
+        self.truth = truth
+        self.here: int | None = None  # the node the robot is at or last left
+        self.leaving: tuple[int, int] | None = None  # (node, port) being traced
+        self.detoured = False  # the tracer left the edge since, and did not rejoin it
+        self._detour_from: tuple[float, float] | None = None
+        self.partial_m = 0.0  # length before a weak meet point passed through
+        self.plan: list[Step] = []
+        self.frozen: set[tuple[int, int]] = set()
+        self.done = False
+        self.merges: list[MergeRecord] = []
+        self.notes: list[Note] = []
+        self.bounces: dict[tuple[int, int], int] = {}
+        self._last_visit: tuple[int, tuple[float, ...], int, float, float] | None = None
+        self._now = 0.0
+        self._odo: Odometry | None = None
+
+    @property
+    def mode(self) -> Mode:
+        if self.done:
+            return Mode.DONE
+        if self.hyps:
+            return Mode.DISAMBIGUATE
+        if self.leaving is None or self.detoured:
+            return Mode.LOST
+        f, j = self.leaving
+        return Mode.EXPLORE if self.map.node(f).ports[j] is None else Mode.NAVIGATE
+
+    def step(
+        self, scan: SonarScan, odo: Odometry, status: DriveStatus, now_s: float
+    ) -> tuple[Twist, list[Event]]:
+        if self.done:
+            return Twist(), []
+        self._now, self._odo = now_s, odo
+        twist, events = self.tracer.step(scan, odo, status, now_s)
+        self._watch_detour(odo)
+        for ev in events:
+            if isinstance(ev, BoundaryReached):
+                self._on_boundary(ev)
+        return (Twist() if self.done else twist), events
+
+    def _watch_detour(self, odo: Odometry) -> None:
+        b = self.tracer.behaviour
+        if b in (Behaviour.ACCESS, Behaviour.BACKOFF):
+            if self._detour_from is None:
+                self._detour_from = (odo.x_m, odo.y_m)
+            self.detoured = True
+        elif self._detour_from is not None and b is Behaviour.TRACE:
+            x, y = self._detour_from
+            if math.hypot(odo.x_m - x, odo.y_m - y) <= self.p.rejoin_m:
+                self.detoured = False
+            self._detour_from = None
+
+    def unexplored(self) -> list[tuple[int, int]]:
+        """Departures still to explore (those frozen by an ambiguity are left out)."""
+        return [x for x in self.map.unexplored() if x not in self.frozen]
+
+    # ------------------------------------------------------------------ meet points
+    def _choose(self, ev: MeetPointReached) -> int:
+        node, rot = self._arrive(ev)
+        deg = ev.degree
+        if self.partial_m > 0 and self.leaving is not None and self.leaving[0] == node:
+            return self._through_index(ev)  # a weak meet point: carry on along the edge
+        renamed = self._resolve(node)
+        if node in renamed:
+            node, shift = renamed[node]
+            rot = (rot + shift) % deg
+        self.here = node
+        self._last_visit = (node, ev.departures_rad, rot, ev.x_m, ev.y_m)
+        arrival = None if ev.arrival_index is None else (ev.arrival_index + rot) % deg
+        port = self._next_port(node, arrival)
+        if port is None:
+            self.done = True
+            self._note(f"exploration complete: {self._size()}")
+            return ev.arrival_index or 0
+        self.leaving = (node, port)
+        self.detoured = False
+        self._detour_from = None
+        self.partial_m = 0.0
+        return (port - rot) % deg
+
+    def _arrive(self, ev: MeetPointReached) -> tuple[int, int]:
+        """Which map node the robot has homed onto, and the rotation from the event's
+        departure indices to its ports (index i is port ``(i + rot) % degree``)."""
+        a = ev.arrival_index
+        length = None if ev.edge_length_m is None else ev.edge_length_m + self.partial_m
+        if self.leaving is None or self.detoured or a is None:
+            return self._lost(ev, "off the graph")
+        f, j = self.leaving
+        bounced = self._bounced(ev)
+        if bounced is not None:
+            return bounced
+        e = self.map.node(f).ports[j]
+        seen = self._seen(ev, a, f)
+        if e is not None:
+            return self._expected(ev, seen, f, j, e, length)
+        return self._new_edge(ev, seen, f, j, length)
+
+    def _bounced(self, ev: MeetPointReached) -> tuple[int, int] | None:
+        lv, p = self._last_visit, self.p
+        if lv is None or self.leaving is None or ev.edge_length_m is None:
+            return None
+        node, deps, rot, x, y = lv
+        if (
+            node != self.leaving[0]
+            or not self.map.has_node(node)
+            or ev.edge_length_m > p.bounce_length_m
+            or math.hypot(ev.x_m - x, ev.y_m - y) > p.bounce_m
+            or ev.degree != len(deps)
+        ):
+            return None
+        # Same place, seconds later: absolute bearings still agree, so they fix the rotation.
+        shift = min(
+            range(ev.degree),
+            key=lambda k: sum(
+                _angdiff(ev.departures_rad[i], deps[(i + k) % ev.degree]) for i in range(ev.degree)
+            ),
+        )
+        key = self.leaving
+        self.bounces[key] = self.bounces.get(key, 0) + 1
+        if self.bounces[key] > p.bounce_retries and self.map.node(key[0]).ports[key[1]] is None:
+            self.frozen.add(key)
+        self._note(f"back at node {node}: departure {key[1]} could not be held")
+        return node, (rot + shift) % ev.degree
+
+    def _expected(
+        self, ev: MeetPointReached, seen: Signature, f: int, j: int, e: int, length: float | None
+    ) -> tuple[int, int]:
+        tol = self.p.tol
+        edge = self.map.edge(e)
+        w, q = edge.other_end(f, j)
+        a = ev.arrival_index
+        assert a is not None
+        k = self._match(seen, a, w, q, length, edge.length_m)
+        if k is None and self.map.node(f).kind == "boundary" and self.map.node(w).degree == (
+            ev.degree
+        ):
+            # Back from a dead end there is one place to arrive at; only the signature's
+            # noisier parts (clearance, a departure angle) disagree: trust the topology.
+            k = (q - a) % ev.degree
+            self._note(f"node {w} confirmed by topology alone (back from boundary {f})")
+        if k is not None:
+            if length is not None:
+                self.map.add_measurement(e, length)
+            self.partial_m = 0.0
+            return w, k
+        if length is not None and length < edge.length_m - tol.length_abs_m and self._through(ev):
+            # A weak meet point halfway (section VII-B): it did not show when the edge was
+            # first traced. Not a node of the map; the edge goes on straight ahead.
+            self.partial_m = length
+            self._note(f"weak meet point passed on edge {e} ({f}-{w})")
+            return f, 0
+        # Homed past a weak meet point: one edge further than planned (section V-B).
+        found = []
+        for p, e2 in enumerate(self.map.node(w).ports):
+            if e2 is None or p == q:
+                continue
+            e2d = self.map.edge(e2)
+            w2, q2 = e2d.other_end(w, p)
+            k2 = self._match(seen, a, w2, q2, length, edge.length_m + e2d.length_m)
+            if k2 is not None:
+                found.append((w2, k2))
+        if len(found) == 1:
+            self._note(f"expected node {w}, recognised node {found[0][0]} one edge further")
+            self.partial_m = 0.0
+            return found[0]
+        return self._lost(ev, f"expected node {w} after edge {e}, found another place")
+
+    def _match(
+        self, seen: Signature, a: int, w: int, q: int, length: float | None, mapped: float
+    ) -> int | None:
+        tol = self.p.tol
+        node = self.map.node(w)
+        if node.kind != "meet" or not tol.length_ok(length, mapped):
+            return None
+        for k in rotations(seen, self.map.signature(w), tol.clearance_m, tol.angle_rad):
+            if (a + k) % node.degree == q:
+                return k
+        return None
+
+    def _new_edge(
+        self, ev: MeetPointReached, seen: Signature, f: int, j: int, length: float | None
+    ) -> tuple[int, int]:
+        a = ev.arrival_index
+        assert a is not None
+        tol = self.p.tol
+        # What each open hypothesis predicted for this edge, checked before the map changes.
+        survivors: list[Hypothesis] = []
+        confirmed: list[tuple[Hypothesis, int, int]] = []
+        for h in self.hyps.live:
+            pred = predict(self.map, h, f, j)
+            if pred is None:
+                survivors.append(h)
+                continue
+            k = arrival_matches(self.map, seen, a, pred, length, tol)
+            if k is not None:
+                survivors.append(h)
+                confirmed.append((h, pred.node, k))
+        node = self._add_meet(ev)
+        self.map.connect(f, j, node, a, 0.0 if length is None else length)
+        for h, w, k in confirmed:
+            h.mapping[node] = (w, k)
+            h.confirmed += 1
+        dropped = len(self.hyps.live) - len(survivors)
+        self.hyps.live = survivors
+        if self.hyps.live:
+            self.hyps.fragment.add(node)
+        fresh = candidates(
+            self.map, self.map.signature(node), tol, self.hyps.fragment | {node}, a
+        )
+        # A look-alike some open hypothesis already maps this node to adds nothing: that
+        # hypothesis says the same and more, and has the evidence.
+        implied = {h.mapping[node] for h in self.hyps.live if node in h.mapping}
+        fresh = [ck for ck in fresh if ck not in implied]
+        for c, k in fresh:
+            self.hyps.live.append(Hypothesis({node: (c, k)}))
+        if fresh:
+            self.hyps.fragment.add(node)
+        if dropped or fresh:
+            self._note(
+                f"node {node}: {len(fresh)} look-alike(s), {dropped} hypothesis(es) refuted, "
+                f"{len(self.hyps.live)} open"
+            )
+        self.partial_m = 0.0
+        return node, 0
+
+    def _lost(self, ev: MeetPointReached, why: str) -> tuple[int, int]:
+        """Not knowing where the robot came from, the node goes in unattached and every old
+        node that looks like it is a hypothesis to test."""
+        self._abandon_hypotheses()
+        node = self._add_meet(ev)
+        tol = self.p.tol
+        fresh = candidates(self.map, self.map.signature(node), tol, {node}, None)
+        for c, k in fresh:
+            self.hyps.live.append(Hypothesis({node: (c, k)}))
+        if fresh:
+            self.hyps.fragment.add(node)
+        self.plan = []
+        self.partial_m = 0.0
+        self._note(f"lost ({why}): new node {node}, {len(fresh)} look-alike(s)")
+        return node, 0
+
+    # ------------------------------------------------------------------ boundary points
+    def _on_boundary(self, ev: BoundaryReached) -> None:
+        length = None if ev.edge_length_m is None else ev.edge_length_m + self.partial_m
+        self.partial_m = 0.0
+        tol = self.p.tol
+        if self.leaving is None or self.detoured:
+            self._abandon_hypotheses()
+            b = self._add_boundary(ev)
+            self.leaving, self.detoured = (b, 0), False
+            return
+        f, j = self.leaving
+        e = self.map.node(f).ports[j]
+        if e is not None:
+            edge = self.map.edge(e)
+            w, q = edge.other_end(f, j)
+            if self.map.node(w).kind == "boundary" and tol.length_ok(length, edge.length_m):
+                if length is not None:
+                    self.map.add_measurement(e, length)
+                self.leaving = (w, q)
+                return
+            self._abandon_hypotheses()
+            self.plan = []
+            b = self._add_boundary(ev)
+            self._note(f"expected node {w} after edge {e}, found a boundary: node {b}")
+            self.leaving, self.detoured = (b, 0), False
+            return
+        survivors = []
+        confirmed = []
+        for h in self.hyps.live:
+            pred = predict(self.map, h, f, j)
+            if pred is None:
+                survivors.append(h)
+            elif pred.kind == "boundary" and tol.length_ok(length, pred.length_m):
+                survivors.append(h)
+                confirmed.append((h, pred.node))
+        b = self._add_boundary(ev)
+        self.map.connect(f, j, b, 0, 0.0 if length is None else length)
+        for h, w in confirmed:
+            h.mapping[b] = (w, 0)
+            h.confirmed += 1
+        self.hyps.live = survivors
+        if survivors:
+            self.hyps.fragment.add(b)
+        else:
+            self.hyps.clear()
+        self.leaving = (b, 0)
+
+    # ------------------------------------------------------------------ decisions
+    def _resolve(self, node: int) -> dict[int, tuple[int, int]]:
+        """Merge a proven hypothesis; record an ambiguity no move here can settle. Returns
+        the nodes a merge renamed: old id -> (id, port shift)."""
+        if not self.hyps.live:
+            self.hyps.clear()
+            return {}
+        # A hypothesis no prediction has tested yet is in the same position as "all of it is
+        # new": possible, unrefuted, unsupported. Only tested hypotheses compete.
+        tested = [h for h in self.hyps.live if h.confirmed > 0]
+        if len(tested) == 1 and tested[0].confirmed >= self.p.merge_evidence:
+            return self._merge(tested[0])
+        if node in self.hyps.fragment and separating_port(self.map, self.hyps, node) is not None:
+            return {}
+        if len(tested) == 1:
+            return self._merge(tested[0])
+        self._abandon_hypotheses()
+        return {}
+
+    def _abandon_hypotheses(self) -> None:
+        """Nothing can tell the fragment from its look-alikes: keep its nodes as new places,
+        say so in the map, and do not re-explore through them what the look-alikes already
+        explored (that would unroll a symmetric building for ever)."""
+        # Only hypotheses some prediction has confirmed count: a look-alike whose departures
+        # are all unexplored could not be tested yet, which is no ambiguity.
+        tested = [h for h in self.hyps.live if h.confirmed > 0]
+        for x in sorted(self.hyps.fragment):
+            if not self.map.has_node(x):
+                continue
+            others = {h.mapping[x][0] for h in tested if x in h.mapping}
+            if not others:
+                continue
+            self.map.set_ambiguous(x, others)
+            for p, e in enumerate(self.map.node(x).ports):
+                if e is None and all(
+                    (img := h.image_port(self.map, x, p)) is not None
+                    and self.map.node(img[0]).ports[img[1]] is not None
+                    for h in tested
+                    if x in h.mapping
+                ):
+                    self.frozen.add((x, p))
+            self._note(f"node {x} is ambiguous with {sorted(others)}: not merged")
+        self.hyps.clear()
+
+    def _merge(self, h: Hypothesis) -> dict[int, tuple[int, int]]:
+        renamed: dict[int, tuple[int, int]] = {}
+        pairs = []
+        try:
+            for x, (c, k) in sorted(h.mapping.items()):
+                x2, s = renamed.get(x, (x, 0))
+                c2, s2 = renamed.get(c, (c, 0))
+                if x2 == c2 or not self.map.has_node(x2):
+                    continue
+                # Port j of x is port (j + s) of x2; port (j + k) of c is port (j + k + s2)
+                # of c2: so port i of x2 is port (i - s + k + s2) of c2.
+                rot = (k + s2 - s) % self.map.node(c2).degree
+                plan = self.map.plan_merge(c2, x2, rot)
+                for d, (r, _) in plan.nodes.items():
+                    pairs.append((d, r, self.map.node(d).truth, self.map.node(r).truth))
+                self.map.merge(c2, x2, rot)
+                for d, (r, sh) in plan.nodes.items():
+                    for old, (cur, s0) in list(renamed.items()):
+                        if cur == d:
+                            renamed[old] = (r, (s0 + sh) % self.map.node(r).degree)
+                    renamed.setdefault(d, (r, sh))
+        except MapError as exc:
+            self._note(f"merge refused by the map ({exc}): keeping both")
+            self._abandon_hypotheses()
+            return {}
+        self.merges.append(MergeRecord(self._now, tuple(pairs)))
+        self._note(
+            "loop closed: " + ", ".join(f"{d}={r}" for d, r, _, _ in pairs) + f"; {self._size()}"
+        )
+        self._apply_renames(renamed)
+        self.hyps.clear()
+        return renamed
+
+    def _apply_renames(self, renamed: dict[int, tuple[int, int]]) -> None:
+        if self.leaving is not None and self.leaving[0] in renamed:
+            r, s = renamed[self.leaving[0]]
+            self.leaving = (r, (self.leaving[1] + s) % self.map.node(r).degree)
+        self.frozen = {
+            (renamed[n][0], (p + renamed[n][1]) % self.map.node(renamed[n][0]).degree)
+            if n in renamed
+            else (n, p)
+            for n, p in self.frozen
+        }
+        self.plan = []
+
+    def _next_port(self, node: int, arrival: int | None) -> int | None:
+        if self.hyps and node in self.hyps.fragment:
+            p = separating_port(self.map, self.hyps, node)
+            if p is not None:
+                self.plan = []
+                return p
+        if self.plan and self.plan[0].node == node:
+            return self.plan.pop(0).port
+        self.plan = []
+        ports = self.map.node(node).ports
+        deg = len(ports)
+        free = [p for p, e in enumerate(ports) if e is None and (node, p) not in self.frozen]
+        if free:
+            start = -1 if arrival is None else arrival
+            return min(free, key=lambda p: (p - start - 1) % deg)
+        path = self._frontier_path(node)
+        if not path:
+            return None
+        self.plan = path
+        return self.plan.pop(0).port
+
+    def _frontier_path(self, node: int) -> list[Step]:
+        """The graph path to the nearest node with a departure left to explore."""
+        todo = {n for n, _ in self.unexplored()}
+        if not todo:
+            return []
+        dist = nx.single_source_dijkstra_path_length(
+            self.map.graph, node, weight=lambda u, v, d: min(x["length_m"] for x in d.values())
+        )
+        reachable = [(d, n) for n, d in dist.items() if n in todo]
+        if not reachable:
+            return []
+        _, target = min(reachable)
+        return self.map.shortest_path(node, target)
+
+    # ------------------------------------------------------------------ helpers
+    def _seen(self, ev: MeetPointReached, a: int, came_from: int) -> Signature:
+        tb: list[bool | None] = [None] * ev.degree
+        tb[a] = self.map.node(came_from).kind == "boundary"
+        return Signature("meet", ev.clearance_m, ev.departures_rad, tuple(tb))
+
+    def _through(self, ev: MeetPointReached) -> bool:
+        return ev.arrival_index is not None and self._through_port(ev) is not None
+
+    def _through_port(self, ev: MeetPointReached) -> int | None:
+        a = ev.arrival_index
+        if a is None:
+            return None
+        back = ev.departures_rad[a]
+        ahead = (back + math.pi) % TAU
+        best = min(range(ev.degree), key=lambda i: _angdiff(ev.departures_rad[i], ahead))
+        if best == a or _angdiff(ev.departures_rad[best], ahead) > self.p.weak_through_rad:
+            return None
+        return best
+
+    def _through_index(self, ev: MeetPointReached) -> int:
+        i = self._through_port(ev)
+        assert i is not None
+        return i
+
+    def _add_meet(self, ev: MeetPointReached) -> int:
+        truth = self.truth() if self.truth else None
+        return self.map.add_meet(ev.clearance_m, ev.departures_rad, (ev.x_m, ev.y_m), truth)
+
+    def _add_boundary(self, ev: BoundaryReached) -> int:
+        truth = self.truth() if self.truth else None
+        return self.map.add_boundary(ev.clearance_m, (ev.x_m, ev.y_m), truth=truth)
+
+    def _size(self) -> str:
+        return f"{len(self.map.nodes())} nodes, {len(self.map.edges())} edges"
+
+    def _note(self, text: str) -> None:
+        self.notes.append(Note(self._now, text))
+
+
+def _angdiff(a: float, b: float) -> float:
+    return abs((a - b + math.pi) % TAU - math.pi)

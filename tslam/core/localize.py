@@ -1,0 +1,169 @@
+"""Two-dimensional localization (section V-C): is the meet point just reached new or old?
+
+When the robot homes onto a meet point that looks like one already in the map, the map cannot
+know yet whether it is back at that place or at a new one that looks the same. The new node goes
+into the map (it *is* new under one hypothesis) and a ``Hypotheses`` set starts: each hypothesis
+says which old node each new node of the *fragment* (the nodes found since) would be, and with
+which rotation of its ports. Every edge the robot then traces from a fragment node is a test:
+where a hypothesis maps that node to an old one whose corresponding departure is explored, it
+predicts the edge's length and the node at its end, with the port the robot must arrive by. A
+failed prediction kills the hypothesis; a met one counts as evidence.
+
+Only the map's topology and edge lengths decide (the paper's stable features); dead reckoning is
+never consulted. "All of them are new places" is always possible and never refuted by what the
+robot sees, so a merge needs a single surviving hypothesis *and* confirmed predictions: the
+paper's Fig. 12 merge came after two edges and three nodes matched.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from tslam.core.signature import Signature, rotations
+from tslam.core.topomap import TopoMap
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    clearance_m: float = 0.15
+    angle_rad: float = math.radians(25.0)
+    length_abs_m: float = 0.35  # encoder lengths include homing and detours ...
+    length_rel: float = 0.12  # ... so the tolerance grows with the edge
+
+    def length_ok(self, measured: float | None, mapped: float) -> bool:
+        if measured is None:
+            return True
+        return abs(measured - mapped) <= self.length_abs_m + self.length_rel * mapped
+
+
+@dataclass
+class Hypothesis:
+    """Fragment node -> (old node, rotation k): port j of the fragment node is port
+    ``(j + k) % degree`` of the old node (the map's merge convention)."""
+
+    mapping: dict[int, tuple[int, int]]
+    confirmed: int = 0
+
+    def image_port(self, tmap: TopoMap, node: int, port: int) -> tuple[int, int] | None:
+        if node not in self.mapping:
+            return None
+        c, k = self.mapping[node]
+        return c, (port + k) % tmap.node(c).degree
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """What a hypothesis says the robot will find at the end of a departure."""
+
+    node: int  # an old node
+    arrival_port: int
+    length_m: float
+    kind: str
+
+
+@dataclass
+class Hypotheses:
+    fragment: set[int] = field(default_factory=set)
+    live: list[Hypothesis] = field(default_factory=list)
+
+    def __bool__(self) -> bool:
+        return bool(self.live)
+
+    def clear(self) -> None:
+        self.fragment.clear()
+        self.live.clear()
+
+    def candidates_of(self, node: int) -> set[int]:
+        return {h.mapping[node][0] for h in self.live if node in h.mapping}
+
+
+def candidates(
+    tmap: TopoMap,
+    seen: Signature,
+    tol: Tolerances,
+    exclude: set[int],
+    arrival_port: int | None,
+) -> list[tuple[int, int]]:
+    """Old nodes the node ``seen`` could be, with the rotation: signature matches and, if the
+    robot came by a new edge, the corresponding departure of the old node must be unexplored
+    too (a known edge would already have brought the robot there)."""
+    out = []
+    for other in tmap.nodes():
+        if other.id in exclude or other.kind != seen.kind:
+            continue
+        sig = tmap.signature(other.id)
+        for k in rotations(seen, sig, tol.clearance_m, tol.angle_rad):
+            if (
+                arrival_port is not None
+                and other.ports[(arrival_port + k) % other.degree] is not None
+            ):
+                continue
+            out.append((other.id, k))
+    return out
+
+
+def predict(tmap: TopoMap, h: Hypothesis, node: int, port: int) -> Prediction | None:
+    """What ``h`` predicts for leaving ``node`` by ``port``; None if it cannot say."""
+    img = h.image_port(tmap, node, port)
+    if img is None:
+        return None
+    c, pc = img
+    e = tmap.node(c).ports[pc]
+    if e is None:
+        return None
+    edge = tmap.edge(e)
+    w, q = edge.other_end(c, pc)
+    return Prediction(w, q, edge.length_m, tmap.node(w).kind)
+
+
+def arrival_matches(
+    tmap: TopoMap,
+    seen: Signature,
+    arrival_port: int | None,
+    pred: Prediction,
+    length_m: float | None,
+    tol: Tolerances,
+) -> int | None:
+    """The rotation under which the node ``seen`` is the predicted one, or None."""
+    if not tol.length_ok(length_m, pred.length_m):
+        return None
+    if seen.kind != pred.kind:
+        return None
+    sig = tmap.signature(pred.node)
+    for k in rotations(seen, sig, tol.clearance_m, tol.angle_rad):
+        if arrival_port is None or (arrival_port + k) % tmap.node(pred.node).degree == (
+            pred.arrival_port
+        ):
+            return k
+    return None
+
+
+def separating_port(tmap: TopoMap, hyps: Hypotheses, node: int) -> int | None:
+    """The unexplored departure of ``node`` whose predictions split the live hypotheses into
+    the most groups (the move that separates them fastest); None if no departure tests any."""
+    best: tuple[int, float, int] | None = None
+    best_port = None
+    for p, e in enumerate(tmap.node(node).ports):
+        if e is not None:
+            continue
+        keys: set[object] = set()
+        known = 0
+        lengths = []
+        for h in hyps.live:
+            pred = predict(tmap, h, node, p)
+            if pred is None:
+                keys.add(None)
+            else:
+                known += 1
+                lengths.append(pred.length_m)
+                keys.add((pred.node, pred.arrival_port))
+        if known == 0:
+            continue
+        groups = len(keys)
+        if groups < 2 and len(hyps.live) > 1:
+            continue  # every hypothesis predicts the same: nothing to learn here
+        score = (groups, -min(lengths), -p)
+        if best is None or score > best:
+            best, best_port = score, p
+    return best_port
