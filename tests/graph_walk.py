@@ -27,6 +27,7 @@ class TrueGraph:
         default_factory=dict
     )
     ends: dict[tuple[str, int], tuple[str, int, float]] = field(default_factory=dict)
+    _done: set[tuple[int, int]] = field(default_factory=set)
 
     def meet(self, name: str, x: float, y: float, bearings_deg: list[float], clr: float = 1.0):
         deps = tuple(sorted(math.radians(b) % TAU for b in bearings_deg))
@@ -93,3 +94,27 @@ def walk(
         else:
             at, came_by = nxt, nport
     return visited
+
+
+def from_ground_truth(gvg: object) -> TrueGraph:
+    """The true graph of a world's ground-truth GVG (meet and boundary points only)."""
+    g = TrueGraph()
+    keep = {n.id: n for n in gvg.nodes if n.kind in ("meet", "boundary")}  # type: ignore[attr-defined]
+    for n in keep.values():
+        if n.kind == "meet":
+            bearings = [math.degrees(a) for a in n.departure_angles]
+            g.meet(str(n.id), n.x, n.y, bearings, n.clearance_m)
+        else:
+            g.boundary(str(n.id), n.x, n.y)
+    for n in keep.values():
+        for a, e in zip(n.departure_angles, n.departure_edges, strict=True):
+            edge = next(x for x in gvg.edges if x.id == e)  # type: ignore[attr-defined]
+            other = edge.v if edge.u == n.id else edge.u
+            if other not in keep or (n.id, e) in g._done:
+                continue
+            o = keep[other]
+            ob = next(b for b, oe in zip(o.departure_angles, o.departure_edges, strict=True)
+                      if oe == e and (other != n.id or b != a))
+            g.edge(str(n.id), math.degrees(a), str(other), math.degrees(ob), edge.length_m)
+            g._done |= {(n.id, e), (other, e)}
+    return g

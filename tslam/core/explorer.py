@@ -75,9 +75,14 @@ class ExplorerParams:
     rejoin_m: float = 1.0
     # Homed back onto the point just left (the edge could not be held near the junction):
     # recognised by dead reckoning, which is good over a metre, and retried once.
-    bounce_m: float = 0.25
+    bounce_m: float = 0.2
+    bounce_angle_rad: float = math.radians(20.0)
     bounce_length_m: float = 1.5
     bounce_retries: int = 1
+    # A hypothesis that has predicted nothing for this many arrivals in a row is dropped: the
+    # robot has gone where it cannot be tested, and "a new place" explains as much. This is
+    # the paper's candidate sets, each holding only what adjoins the previous set.
+    silent_life: int = 2
 
 
 @dataclass(frozen=True)
@@ -222,12 +227,16 @@ class Explorer:
         ):
             return None
         # Same place, seconds later: absolute bearings still agree, so they fix the rotation.
-        shift = min(
-            range(ev.degree),
-            key=lambda k: sum(
+        # A twin junction a few decimetres away has other bearings (one of its edges leads
+        # back to the point just left), which tells it from a bounce.
+        def misfit(k: int) -> float:
+            return max(
                 _angdiff(ev.departures_rad[i], deps[(i + k) % ev.degree]) for i in range(ev.degree)
-            ),
-        )
+            )
+
+        shift = min(range(ev.degree), key=misfit)
+        if misfit(shift) > p.bounce_angle_rad:
+            return None
         key = self.leaving
         self.bounces[key] = self.bounces.get(key, 0) + 1
         if self.bounces[key] > p.bounce_retries and self.map.node(key[0]).ports[key[1]] is None:
@@ -276,7 +285,13 @@ class Explorer:
             self._note(f"expected node {w}, recognised node {found[0][0]} one edge further")
             self.partial_m = 0.0
             return found[0]
-        return self._lost(ev, f"expected node {w} after edge {e}, found another place")
+        wn = self.map.node(w)
+        why = (
+            f"expected node {w} (degree {wn.degree}, clearance {wn.clearance_m:.2f} m) after "
+            f"edge {e} ({edge.length_m:.2f} m), found degree {ev.degree}, clearance "
+            f"{ev.clearance_m:.2f} m after {length or 0:.2f} m"
+        )
+        return self._lost(ev, why)
 
     def _match(
         self, seen: Signature, a: int, w: int, q: int, length: float | None, mapped: float
@@ -305,7 +320,9 @@ class Explorer:
                 survivors.append(h)
                 continue
             k = arrival_matches(self.map, seen, a, pred, length, tol)
-            if k is not None:
+            # Two new nodes cannot both be one old place: the fragment is a walk through
+            # places the robot had not seen since it left the map.
+            if k is not None and all(c != pred.node for c, _ in h.mapping.values()):
                 survivors.append(h)
                 confirmed.append((h, pred.node, k))
         node = self._add_meet(ev)
@@ -314,7 +331,7 @@ class Explorer:
             h.mapping[node] = (w, k)
             h.confirmed += 1
         dropped = len(self.hyps.live) - len(survivors)
-        self.hyps.live = survivors
+        self.hyps.live = self._age(survivors, {id(h) for h, _, _ in confirmed})
         if self.hyps.live:
             self.hyps.fragment.add(node)
         fresh = candidates(
@@ -392,12 +409,21 @@ class Explorer:
         for h, w in confirmed:
             h.mapping[b] = (w, 0)
             h.confirmed += 1
+        survivors = self._age(survivors, {id(h) for h, _ in confirmed})
         self.hyps.live = survivors
         if survivors:
             self.hyps.fragment.add(b)
         else:
             self.hyps.clear()
         self.leaving = (b, 0)
+
+    def _age(self, hyps: list[Hypothesis], spoke: set[int]) -> list[Hypothesis]:
+        out = []
+        for h in hyps:
+            h.silent_arrivals = 0 if id(h) in spoke else h.silent_arrivals + 1
+            if h.silent_arrivals <= self.p.silent_life:
+                out.append(h)
+        return out
 
     # ------------------------------------------------------------------ decisions
     def _resolve(self, node: int) -> dict[int, tuple[int, int]]:

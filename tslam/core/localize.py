@@ -44,6 +44,7 @@ class Hypothesis:
 
     mapping: dict[int, tuple[int, int]]
     confirmed: int = 0
+    silent_arrivals: int = 0  # arrivals in a row it made no prediction for
 
     def image_port(self, tmap: TopoMap, node: int, port: int) -> tuple[int, int] | None:
         if node not in self.mapping:
