@@ -59,7 +59,9 @@ class EmulatorHost:
         self.lockstep = lockstep
         self.tick_s = tick_s
         self._monotonic = monotonic
-        self._running = False
+        # Set here, not in run: a stop() from a signal handler that lands before run() starts
+        # must still be honoured.
+        self._running = True
 
     def advance(self, dt_s: float) -> None:
         """Let ``dt_s`` of simulated time pass (lockstep mode's only source of time)."""
@@ -70,7 +72,6 @@ class EmulatorHost:
 
     def run(self, max_wall_s: float | None = None) -> None:
         """Serve until ``stop``; ``max_wall_s`` bounds the run (tests)."""
-        self._running = True
         start = last = self._monotonic()
         try:
             while self._running:

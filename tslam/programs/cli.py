@@ -15,7 +15,7 @@ class UserError(Exception):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from tslam.programs import bench_cmd, sim_cmd, trace_cmd, world_cmds
+    from tslam.programs import bench_cmd, emulate_cmd, sim_cmd, trace_cmd, world_cmds
 
     parser = argparse.ArgumentParser(
         prog="tslam", description="Topological SLAM on the generalized Voronoi graph."
@@ -25,6 +25,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim_cmd.add_parser(sub)
     trace_cmd.add_parser(sub)
     bench_cmd.add_parser(sub)
+    emulate_cmd.add_parser(sub)
     return parser
 
 
