@@ -37,13 +37,14 @@ from hal.types import DriveStatus, Odometry, SonarScan, Twist
 from tslam.core.localize import (
     Hypotheses,
     Hypothesis,
+    Prediction,
     Tolerances,
     arrival_matches,
     candidates,
     predict,
     separating_port,
 )
-from tslam.core.signature import Signature, rotations
+from tslam.core.signature import Signature
 from tslam.core.topomap import MapError, Step, TopoMap
 from tslam.core.tracer import (
     Behaviour,
@@ -177,7 +178,9 @@ class Explorer:
         node, rot = self._arrive(ev)
         deg = ev.degree
         if self.partial_m > 0 and self.leaving is not None and self.leaving[0] == node:
-            return self._through_index(ev)  # a weak meet point: carry on along the edge
+            through = self._through_port(ev)
+            assert through is not None  # _expected only passes through where there is one
+            return through  # a weak meet point: carry on along the edge
         renamed = self._resolve(node)
         if node in renamed:
             node, shift = renamed[node]
@@ -265,7 +268,8 @@ class Explorer:
                 self.map.add_measurement(e, length)
             self.partial_m = 0.0
             return w, k
-        if length is not None and length < edge.length_m - tol.length_abs_m and self._through(ev):
+        short = length is not None and length < edge.length_m - tol.length_abs_m
+        if short and self._through_port(ev) is not None:
             # A weak meet point halfway (section VII-B): it did not show when the edge was
             # first traced. Not a node of the map; the edge goes on straight ahead.
             self.partial_m = length
@@ -296,14 +300,10 @@ class Explorer:
     def _match(
         self, seen: Signature, a: int, w: int, q: int, length: float | None, mapped: float
     ) -> int | None:
-        tol = self.p.tol
-        node = self.map.node(w)
-        if node.kind != "meet" or not tol.length_ok(length, mapped):
-            return None
-        for k in rotations(seen, self.map.signature(w), tol.clearance_m, tol.angle_rad):
-            if (a + k) % node.degree == q:
-                return k
-        return None
+        """The rotation under which ``seen``, arrived at by index ``a``, is node ``w`` reached by
+        its port ``q`` after an edge of ``mapped`` metres; None if it is not."""
+        pred = Prediction(w, q, mapped, self.map.node(w).kind)
+        return arrival_matches(self.map, seen, a, pred, length, self.p.tol)
 
     def _new_edge(
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, length: float | None
@@ -481,10 +481,9 @@ class Explorer:
                 # Port j of x is port (j + s) of x2; port (j + k) of c is port (j + k + s2)
                 # of c2: so port i of x2 is port (i - s + k + s2) of c2.
                 rot = (k + s2 - s) % self.map.node(c2).degree
-                plan = self.map.plan_merge(c2, x2, rot)
-                for d, (r, _) in plan.nodes.items():
-                    pairs.append((d, r, self.map.node(d).truth, self.map.node(r).truth))
-                self.map.merge(c2, x2, rot)
+                truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
+                plan = self.map.merge(c2, x2, rot)
+                pairs.extend((d, r, truth[d], truth[r]) for d, (r, _) in plan.nodes.items())
                 for d, (r, sh) in plan.nodes.items():
                     for old, (cur, s0) in list(renamed.items()):
                         if cur == d:
@@ -555,9 +554,6 @@ class Explorer:
         tb[a] = self.map.node(came_from).kind == "boundary"
         return Signature("meet", ev.clearance_m, ev.departures_rad, tuple(tb))
 
-    def _through(self, ev: MeetPointReached) -> bool:
-        return ev.arrival_index is not None and self._through_port(ev) is not None
-
     def _through_port(self, ev: MeetPointReached) -> int | None:
         a = ev.arrival_index
         if a is None:
@@ -568,11 +564,6 @@ class Explorer:
         if best == a or _angdiff(ev.departures_rad[best], ahead) > self.p.weak_through_rad:
             return None
         return best
-
-    def _through_index(self, ev: MeetPointReached) -> int:
-        i = self._through_port(ev)
-        assert i is not None
-        return i
 
     def _add_meet(self, ev: MeetPointReached) -> int:
         truth = self.truth() if self.truth else None
