@@ -79,7 +79,7 @@ def walk(
         )  # fmt: skip
         explorer._now += 1.0
         k = explorer._choose(ev)
-        if explorer.done:
+        if explorer.held:  # done, or standing at the node it was sent to
             break
         port = order[k]
         nxt, nport, length = graph.ends[(at, port)]

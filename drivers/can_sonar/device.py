@@ -11,6 +11,8 @@ Configuration (``create_backend({"backend": "can-sonar", ...})`` or
 - ``channels``, ``angles_deg``, ``radius_m``: the ring layout (see ``layout``);
 - ``min_range_m`` (0.15), ``max_range_m`` (6.5), ``beam_deg`` (12.5, half beam): the sensor;
 - ``poll_s`` (0.1): how often data is requested; ``max_age_s`` (1.0): older readings are NaN;
+  a ring constructed with ``poll_s=math.inf`` asks once at configure and then only when
+  ``refresh()`` is called (a lockstep run, whose readings must be taken after each step);
 - ``heartbeat_s`` (1.0), ``heartbeat_misses`` (3): the board is lost after that many CONNECT
   replies missed in a row; ``reply_timeout_s`` (0.5): how long configure waits for a reply
   before asking again (5 times, keeping what came, since frames get lost);
@@ -41,6 +43,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -138,6 +141,7 @@ class CanSonarRing(SonarRing):
         self._link: BoardLink | None = None
         self._heartbeat = Heartbeat(heartbeat_s, heartbeat_misses)
         self._table = self._new_table()
+        self._arrivals = dict.fromkeys(range(GROUP_COUNT), 0)  # group frames received
         self._data_lock = threading.Lock()
         self._data_ready = threading.Condition(self._data_lock)
         self._fault: HalError | None = None
@@ -299,6 +303,37 @@ class CanSonarRing(SonarRing):
             half_beam_rad=self.half_beam_rad,
         )
 
+    def refresh(self, timeout_s: float = 2.0) -> None:
+        """Ask the board for every group now and return once each has answered.
+
+        For a caller that lets simulated time pass in steps: with ``poll_s=math.inf`` no other
+        request is in flight, so every reading the next ``scan`` returns was taken after the
+        step. ``timeout_s`` is in host seconds (a stepped clock stands still while this waits).
+        Raises the ring's fault if it has one, ``DeviceTimeoutError`` if a group stays silent.
+        """
+        with self._lock:
+            self._require_active("refresh the readings")
+            link = self._link_or_fail()
+            groups = self.layout.groups
+            with self._data_ready:
+                before = {g: self._arrivals[g] for g in groups}
+            link.send(self.codec.get_data(groups))
+            deadline = time.monotonic() + timeout_s
+            with self._data_ready:
+                while True:
+                    if self._fault is not None:
+                        raise type(self._fault)(str(self._fault))
+                    silent = [g for g in groups if self._arrivals[g] == before[g]]
+                    if not silent:
+                        return
+                    left = deadline - time.monotonic()
+                    if left <= 0:
+                        raise DeviceTimeoutError(
+                            f"{self.board_name}: no data from groups {silent} within"
+                            f" {timeout_s:g} s of asking"
+                        )
+                    self._data_ready.wait(min(left, _MAX_WAIT_S))
+
     # ------------------------------------------------------------------ configure steps
     def _link_or_fail(self) -> BoardLink:
         if self._link is None:  # pragma: no cover - only reachable by misuse of internals
@@ -312,6 +347,7 @@ class CanSonarRing(SonarRing):
         elif isinstance(reply, GroupData):
             with self._data_ready:
                 self._table.update(reply, stamp)
+                self._arrivals[reply.group] = self._arrivals.get(reply.group, 0) + 1
                 self._data_ready.notify_all()
 
     def _await(
@@ -418,7 +454,9 @@ class CanSonarRing(SonarRing):
 
     def _await_first_data(self) -> None:
         groups = self.layout.groups
-        wait = _ATTEMPTS * max(self.reply_timeout_s, self.poll_s)
+        # Polled on demand there is one request to wait for, not one per period.
+        period = self.poll_s if math.isfinite(self.poll_s) else self.reply_timeout_s
+        wait = _ATTEMPTS * max(self.reply_timeout_s, period)
         deadline = self._clock.now() + wait
         with self._data_ready:
             while not self._table.has_groups(groups):

@@ -63,6 +63,7 @@ class Mode(enum.Enum):
     NAVIGATE = "navigate"  # following a known edge of a planned path
     DISAMBIGUATE = "disambiguate"  # testing localization hypotheses
     LOST = "lost"  # off the graph, or the expected node was not there
+    HOLD = "hold"  # standing at a node it was sent to, waiting for the next order
     DONE = "done"
 
 
@@ -121,11 +122,16 @@ class Explorer:
         self.here: int | None = None  # the node the robot is at or last left
         self.leaving: tuple[int, int] | None = None  # (node, port) being traced
         self.detoured = False  # the tracer left the edge since, and did not rejoin it
-        self._detour_from: tuple[float, float] | None = None
+        self._detour_from: tuple[float, float, float] | None = None
         self.partial_m = 0.0  # length before a weak meet point passed through
+        # Encoder distance spent off the edge in detours that rejoined it: not edge length.
+        self.excess_m = 0.0
         self.plan: list[Step] = []
         self.frozen: set[tuple[int, int]] = set()
         self.done = False
+        self.goal: int | None = None  # a node an operator sent the robot to
+        self.held = False  # standing at a meet point: done, or at its goal
+        self._at: tuple[MeetPointReached, int, int] | None = None  # where held: event, node, rot
         self.merges: list[MergeRecord] = []
         self.notes: list[Note] = []
         self.bounces: dict[tuple[int, int], int] = {}
@@ -137,6 +143,8 @@ class Explorer:
     def mode(self) -> Mode:
         if self.done:
             return Mode.DONE
+        if self.held:
+            return Mode.HOLD
         if self.hyps:
             return Mode.DISAMBIGUATE
         if self.leaving is None or self.detoured:
@@ -147,26 +155,90 @@ class Explorer:
     def step(
         self, scan: SonarScan, odo: Odometry, status: DriveStatus, now_s: float
     ) -> tuple[Twist, list[Event]]:
-        if self.done:
-            return Twist(), []
         self._now, self._odo = now_s, odo
+        if self.held:
+            return Twist(), []
         twist, events = self.tracer.step(scan, odo, status, now_s)
         self._watch_detour(odo)
         for ev in events:
             if isinstance(ev, BoundaryReached):
                 self._on_boundary(ev)
-        return (Twist() if self.done else twist), events
+        return (Twist() if self.held else twist), events
+
+    # ------------------------------------------------------------------ orders
+    def goto(self, node: int) -> str | None:
+        """Head for ``node`` along the graph; the reason if that cannot be done, else None.
+
+        Taken up at the next meet point (at once if the robot is standing at one). While
+        hypotheses are open they are tested first: a path is only as good as the node it
+        starts from.
+        """
+        if not self.map.has_node(node):
+            return f"there is no node {node} in the map"
+        if self.here is None or self.mode is Mode.LOST:
+            return "the robot does not know which node it is at yet"
+        if not nx.has_path(self.map.graph, self.here, node):
+            return f"node {node} is not connected to node {self.here} in the map"
+        self.goal = node
+        self.plan = []
+        self._note(f"ordered to node {node}")
+        self._release()
+        return None
+
+    def explore(self) -> str | None:
+        """Drop any goal and go on exploring; the reason if there is nothing left to explore."""
+        self.goal = None
+        self.plan = []
+        if self.held:
+            self._release()
+            if self.done:
+                return "exploration is complete: no departure is left to explore"
+        return None
+
+    def cancel(self) -> None:
+        """Forget the goal and any planned path (an operator's stop)."""
+        self.goal = None
+        self.plan = []
+
+    def _release(self) -> None:
+        """Leave the meet point the robot is held at, if there is now somewhere to go."""
+        if not self.held or self._at is None or self._odo is None:
+            return
+        ev, node, rot = self._at
+        deg = ev.degree
+        arrival = None if ev.arrival_index is None else (ev.arrival_index + rot) % deg
+        port = self._next_port(node, arrival)
+        if port is None:
+            self._hold(node)
+            return
+        self.held = self.done = False
+        self.leaving = (node, port)
+        self.detoured = False
+        self.partial_m = 0.0
+        self.excess_m = 0.0
+        self.tracer.depart(ev.departures_rad[(port - rot) % deg], self._odo)
+
+    def _hold(self, node: int) -> None:
+        self.held = True
+        if self.goal is not None and node == self.goal:
+            self.goal = None
+            self._note(f"at node {node}, as ordered: holding")
+        elif not self.done:
+            self.done = True
+            self._note(f"exploration complete: {self._size()}")
 
     def _watch_detour(self, odo: Odometry) -> None:
         b = self.tracer.behaviour
         if b in (Behaviour.ACCESS, Behaviour.BACKOFF):
             if self._detour_from is None:
-                self._detour_from = (odo.x_m, odo.y_m)
+                self._detour_from = (odo.x_m, odo.y_m, odo.distance_m)
             self.detoured = True
         elif self._detour_from is not None and b is Behaviour.TRACE:
-            x, y = self._detour_from
-            if math.hypot(odo.x_m - x, odo.y_m - y) <= self.p.rejoin_m:
+            x, y, d0 = self._detour_from
+            gap = math.hypot(odo.x_m - x, odo.y_m - y)
+            if gap <= self.p.rejoin_m:
                 self.detoured = False
+                self.excess_m += max(0.0, odo.distance_m - d0 - gap)
             self._detour_from = None
 
     def unexplored(self) -> list[tuple[int, int]]:
@@ -187,23 +259,24 @@ class Explorer:
             rot = (rot + shift) % deg
         self.here = node
         self._last_visit = (node, ev.departures_rad, rot, ev.x_m, ev.y_m)
+        self._at = (ev, node, rot)
         arrival = None if ev.arrival_index is None else (ev.arrival_index + rot) % deg
         port = self._next_port(node, arrival)
         if port is None:
-            self.done = True
-            self._note(f"exploration complete: {self._size()}")
+            self._hold(node)
             return ev.arrival_index or 0
         self.leaving = (node, port)
         self.detoured = False
         self._detour_from = None
         self.partial_m = 0.0
+        self.excess_m = 0.0
         return (port - rot) % deg
 
     def _arrive(self, ev: MeetPointReached) -> tuple[int, int]:
         """Which map node the robot has homed onto, and the rotation from the event's
         departure indices to its ports (index i is port ``(i + rot) % degree``)."""
         a = ev.arrival_index
-        length = None if ev.edge_length_m is None else ev.edge_length_m + self.partial_m
+        length = self._edge_length(ev.edge_length_m)
         if self.leaving is None or self.detoured or a is None:
             return self._lost(ev, "off the graph")
         f, j = self.leaving
@@ -267,12 +340,13 @@ class Explorer:
             if length is not None:
                 self.map.add_measurement(e, length)
             self.partial_m = 0.0
+            self.excess_m = 0.0
             return w, k
         short = length is not None and length < edge.length_m - tol.length_abs_m
         if short and self._through_port(ev) is not None:
             # A weak meet point halfway (section VII-B): it did not show when the edge was
             # first traced. Not a node of the map; the edge goes on straight ahead.
-            self.partial_m = length
+            self.partial_m, self.excess_m = length, 0.0
             self._note(f"weak meet point passed on edge {e} ({f}-{w})")
             return f, 0
         # Homed past a weak meet point: one edge further than planned (section V-B).
@@ -288,6 +362,7 @@ class Explorer:
         if len(found) == 1:
             self._note(f"expected node {w}, recognised node {found[0][0]} one edge further")
             self.partial_m = 0.0
+            self.excess_m = 0.0
             return found[0]
         wn = self.map.node(w)
         why = (
@@ -351,6 +426,7 @@ class Explorer:
                 f"{len(self.hyps.live)} open"
             )
         self.partial_m = 0.0
+        self.excess_m = 0.0
         return node, 0
 
     def _lost(self, ev: MeetPointReached, why: str) -> tuple[int, int]:
@@ -366,13 +442,15 @@ class Explorer:
             self.hyps.fragment.add(node)
         self.plan = []
         self.partial_m = 0.0
+        self.excess_m = 0.0
         self._note(f"lost ({why}): new node {node}, {len(fresh)} look-alike(s)")
         return node, 0
 
     # ------------------------------------------------------------------ boundary points
     def _on_boundary(self, ev: BoundaryReached) -> None:
-        length = None if ev.edge_length_m is None else ev.edge_length_m + self.partial_m
+        length = self._edge_length(ev.edge_length_m)
         self.partial_m = 0.0
+        self.excess_m = 0.0
         tol = self.p.tol
         if self.leaving is None or self.detoured:
             self._abandon_hypotheses()
@@ -511,6 +589,8 @@ class Explorer:
             else (n, p)
             for n, p in self.frozen
         }
+        if self.goal in renamed:
+            self.goal = renamed[self.goal][0]
         self.plan = []
 
     def _next_port(self, node: int, arrival: int | None) -> int | None:
@@ -519,6 +599,19 @@ class Explorer:
             if p is not None:
                 self.plan = []
                 return p
+        if self.goal is not None and not self.hyps:
+            if node == self.goal:
+                self.plan = []
+                return None
+            if not (self.plan and self.plan[0].node == node):
+                try:
+                    self.plan = self.map.shortest_path(node, self.goal)
+                except MapError:  # a merge or a removal cut the way
+                    self.plan = []
+            if self.plan:
+                return self.plan.pop(0).port
+            self._note(f"no path to node {self.goal} from node {node}: goal dropped")
+            self.goal = None
         if self.plan and self.plan[0].node == node:
             return self.plan.pop(0).port
         self.plan = []
@@ -572,6 +665,13 @@ class Explorer:
     def _add_boundary(self, ev: BoundaryReached) -> int:
         truth = self.truth() if self.truth else None
         return self.map.add_boundary(ev.clearance_m, (ev.x_m, ev.y_m), truth=truth)
+
+    def _edge_length(self, measured: float | None) -> float | None:
+        """The edge's length from the encoders: the stretch before a weak meet point passed
+        through, plus this stretch, less what detours that rejoined the edge added."""
+        if measured is None:
+            return None
+        return max(0.0, measured + self.partial_m - self.excess_m)
 
     def _size(self) -> str:
         return f"{len(self.map.nodes())} nodes, {len(self.map.edges())} edges"

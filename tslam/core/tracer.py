@@ -345,6 +345,11 @@ class Tracer:
         s.node_kind = kind
         return length
 
+    def depart(self, direction_rad: float, odo: Odometry) -> None:
+        """Leave the meet point the robot stands at along ``direction_rad`` (odometry frame):
+        for an arbiter that held the robot there and has since decided where to go."""
+        self._start_depart(direction_rad, odo)
+
     def _start_depart(self, direction: float, odo: Odometry, distance: float | None = None) -> None:
         s = self.s
         s.behaviour = Behaviour.DEPART

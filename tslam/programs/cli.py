@@ -15,7 +15,14 @@ class UserError(Exception):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from tslam.programs import bench_cmd, emulate_cmd, sim_cmd, trace_cmd, world_cmds
+    from tslam.programs import (
+        bench_cmd,
+        daemon_cmd,
+        emulate_cmd,
+        sim_cmd,
+        trace_cmd,
+        world_cmds,
+    )
 
     parser = argparse.ArgumentParser(
         prog="tslam", description="Topological SLAM on the generalized Voronoi graph."
@@ -26,6 +33,10 @@ def build_parser() -> argparse.ArgumentParser:
     trace_cmd.add_parser(sub)
     bench_cmd.add_parser(sub)
     emulate_cmd.add_parser(sub)
+    daemon_cmd.add_parser(sub)
+    from tslam.programs import monitor_cmd
+
+    monitor_cmd.add_parser(sub)
     return parser
 
 
@@ -43,4 +54,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # Run as ``python -m``, this file is ``__main__``; the commands raise the ``UserError`` of
+    # ``tslam.programs.cli``, a different class object, so call that module's ``main``.
+    from tslam.programs.cli import main as _main
+
+    sys.exit(_main())

@@ -126,6 +126,8 @@ def make_can_sonar_device(
     except ValueError as exc:
         raise UserError(f"CAN sonar faults: {exc}") from None
     virtual = get("virtual")
+    if virtual is not None and not str(virtual).strip():
+        raise UserError(f"{flag}virtual must name a channel, got an empty name")
     try:
         return make_device(
             robot,

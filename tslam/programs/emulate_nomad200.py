@@ -2,8 +2,13 @@
 
 Serves on a pseudo-terminal (default) or a TCP socket on loopback and prints one JSON line on
 stdout as soon as it is ready, e.g. ``{"port": "/dev/pts/7", "transport": "pty", ...}``: give
-``port`` to the driver (``nomad200://`` + port, or the option ``port``). Runs until SIGTERM or
-SIGINT, then exits 0.
+``port`` to the driver (``nomad200://`` + port, or the option ``port``), or the whole ``backend``
+configuration to ``create_backend``. Runs until SIGTERM or SIGINT, then exits 0.
+
+``--with-can-sonar`` adds the CAN sonar board (``tslam emulate can-sonar``, its options prefixed
+``--can-``) on an SLCAN pty, firing the same simulated robot's ring: a Nomad 200 retrofitted
+with the board. The line then also carries ``can_sonar`` (the pty and the ``can-sonar``
+configuration) and ``backend`` is the ``composed`` configuration of the two.
 """
 
 from __future__ import annotations
@@ -19,9 +24,14 @@ from typing import TYPE_CHECKING
 
 from sim_backend.odometry_model import DRIFT_LEVELS
 from tslam.programs.cli import UserError
+from tslam.programs.emulate_can_sonar import add_board_arguments, make_can_sonar_device
 
 if TYPE_CHECKING:
+    from sim_backend.emulators.can_sonar import CanSonarDevice
+    from sim_backend.emulators.host import EmulatedDevice
     from sim_backend.emulators.nomad200_faults import FaultConfig
+
+CAN_PREFIX = "can-"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -60,6 +70,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     f.add_argument(
         "--reappear-after-s", type=float, default=None, metavar="S", help="host s (never)"
     )
+    p.add_argument(
+        "--with-can-sonar", action="store_true",
+        help="also serve the CAN sonar board (SLCAN on a second pty) on the same robot",
+    )  # fmt: skip
+    add_board_arguments(p, CAN_PREFIX)
     p.set_defaults(run=_run)
 
 
@@ -107,17 +122,24 @@ def _run(args: argparse.Namespace) -> int:
     if args.link and args.listen:
         raise UserError("--link only applies to --pty")
     faults = _faults(args)
+    _check_board_options(args)
     world = load_world(args.world)
     robot = SimRobot(world, SimParams(drift=args.drift), args.seed)
+    board = make_can_sonar_device(robot, args, CAN_PREFIX) if args.with_can_sonar else None
     try:
         if args.listen:
             transport = TcpTransport(*_listen_address(args.listen))
         else:
             transport = PtyTransport(args.link)
-    except OSError as exc:
+    except (OSError, UserError) as exc:
+        if board is not None:
+            board.close()
+        if isinstance(exc, UserError):
+            raise
         raise UserError(f"cannot serve: {exc}") from None
     device = Nomad200Emulator(robot, transport, lockstep=args.lockstep, faults=faults)
-    host = EmulatorHost(robot, [device], time_scale=args.time_scale, lockstep=args.lockstep)
+    devices: list[EmulatedDevice] = [device] if board is None else [device, board]
+    host = EmulatorHost(robot, devices, time_scale=args.time_scale, lockstep=args.lockstep)
 
     def _stop(signum: int, frame: FrameType | None) -> None:
         host.stop()
@@ -131,8 +153,40 @@ def _run(args: argparse.Namespace) -> int:
         "drift": args.drift,
         "lockstep": args.lockstep,
         "pid": os.getpid(),
+        **_backend_specs(str(transport.describe()["port"]), args, board),
     }
     print(json.dumps(ready), flush=True)
-    print(f"emulate: Nomad 200 on {ready['port']}", file=sys.stderr, flush=True)
+    where = f"emulate: Nomad 200 on {ready['port']}"
+    if board is not None:
+        where += f", CAN sonar board on slcan {board.channel}"
+    print(where, file=sys.stderr, flush=True)
     host.run()
     return 0
+
+
+def _check_board_options(args: argparse.Namespace) -> None:
+    """Board options without the board are a mistake, not something to ignore silently."""
+    if args.with_can_sonar:
+        return
+    probe = argparse.ArgumentParser(add_help=False)
+    add_board_arguments(probe, CAN_PREFIX)
+    for name, default in vars(probe.parse_args([])).items():
+        if getattr(args, name) != default:
+            flag = "--" + name.replace("_", "-")
+            raise UserError(f"{flag} applies to the CAN sonar board: add --with-can-sonar")
+
+
+def _backend_specs(
+    port: str, args: argparse.Namespace, board: CanSonarDevice | None
+) -> dict[str, object]:
+    """Ready-made configurations for ``create_backend`` that reach what is served."""
+    drive: dict[str, object] = {"backend": "nomad200", "port": port, "lockstep": args.lockstep}
+    if args.time_scale != 1.0:
+        drive["time_scale"] = args.time_scale
+    if board is None:
+        return {"backend": drive}
+    sonar = board.backend_options()
+    return {
+        "can_sonar": {"pty": board.channel, "backend": sonar},
+        "backend": {"backend": "composed", "drive": drive, "sonar": sonar},
+    }

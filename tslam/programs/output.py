@@ -23,8 +23,23 @@ def write_text_atomic(path: str | Path, text: str) -> None:
                 os.fsync(f.fileno())
             os.chmod(tmp, 0o644)  # mkstemp makes it private; results are meant to be shared
             os.replace(tmp, target)
+            _sync_dir(parent)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
             raise
     except OSError as exc:
         raise UserError(f"cannot write {target}: {exc.strerror or exc}") from None
+
+
+def _sync_dir(d: Path) -> None:
+    """Make the rename itself durable: without it a power cut can bring back the old file."""
+    try:
+        fd = os.open(d, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError:
+        return  # some filesystems do not open directories; the data itself is synced
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)

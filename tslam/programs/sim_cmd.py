@@ -17,7 +17,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from hal.registry import create_backend
 from hal.types import Twist
 from sim_backend.backend import SimBackend
 from sim_backend.explore_scoring import naive_baseline, score_exploration, true_node_of
@@ -28,6 +27,12 @@ from tslam.core.topomap import TopoMap
 from tslam.core.tracer import MeetPointReached
 from tslam.programs.cli import UserError
 from tslam.programs.output import write_text_atomic
+from tslam.programs.sim_backends import (
+    BackendChoice,
+    add_arguments,
+    choice_from_args,
+    open_backend,
+)
 
 #: Simulated seconds allowed when ``--duration`` is not given: far more than any built-in
 #: world needs, so a run that has not finished by then is stuck and says so.
@@ -46,6 +51,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate", type=float, default=10.0, help="control loop rate in Hz (10)")
     p.add_argument("--out", default=None, help="directory for map.json, map.svg, ... report.json")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
+    add_arguments(p)  # --backend: in process, or through the drivers to emulators
     p.set_defaults(run=_run)
 
 
@@ -70,6 +76,7 @@ def explore(
     duration_s: float | None = None,
     rate_hz: float = 10.0,
     progress: bool = True,
+    backend_choice: BackendChoice | None = None,
 ) -> Run:
     """Explore ``world`` until the arbiter says it is done or ``duration_s`` runs out."""
     limit = DEFAULT_LIMIT_S if duration_s is None else duration_s
@@ -77,8 +84,7 @@ def explore(
         raise UserError(f"--duration must be a positive number of seconds, got {duration_s}")
     if not (0.5 <= rate_hz <= 1000):
         raise UserError(f"--rate must be between 0.5 and 1000 Hz, got {rate_hz}")
-    backend = create_backend({"backend": "sim", "world": world, "seed": seed, "drift": drift})
-    assert isinstance(backend, SimBackend)
+    backend = open_backend(backend_choice or BackendChoice(), world, seed, drift)
     robot = backend.robot
     gvg = compute_gvg(backend.world)
 
@@ -176,8 +182,12 @@ def write_outputs(run: Run, rep: dict[str, Any], out: Path) -> list[str]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    run = explore(args.world, args.seed, args.drift, args.duration, args.rate, not args.quiet)
+    choice = choice_from_args(args)
+    run = explore(
+        args.world, args.seed, args.drift, args.duration, args.rate, not args.quiet, choice
+    )
     rep = report(run, args.world, args.seed, args.drift)
+    rep["backend"] = choice.kind
     if args.out:
         rep["outputs"] = write_outputs(run, rep, Path(args.out))
     print(json.dumps(rep, indent=2))
