@@ -17,7 +17,7 @@ def readme_commands() -> list[str]:
 def test_readme_opens_with_exactly_two_commands():
     cmds = readme_commands()
     assert len(cmds) == 2
-    assert "tslam sim" in cmds[0] and "pytest" in cmds[1]
+    assert "tslam daemon" in cmds[0] and "pytest" in cmds[1]
 
 
 def test_ci_runs_the_readme_test_command():
