@@ -122,10 +122,8 @@ class Explorer:
         self.here: int | None = None  # the node the robot is at or last left
         self.leaving: tuple[int, int] | None = None  # (node, port) being traced
         self.detoured = False  # the tracer left the edge since, and did not rejoin it
-        self._detour_from: tuple[float, float, float] | None = None
+        self._detour_from: tuple[float, float, float, bool] | None = None
         self.partial_m = 0.0  # length before a weak meet point passed through
-        # Encoder distance spent off the edge in detours that rejoined it: not edge length.
-        self.excess_m = 0.0
         self.plan: list[Step] = []
         self.frozen: set[tuple[int, int]] = set()
         self.done = False
@@ -215,7 +213,6 @@ class Explorer:
         self.leaving = (node, port)
         self.detoured = False
         self.partial_m = 0.0
-        self.excess_m = 0.0
         self.tracer.depart(ev.departures_rad[(port - rot) % deg], self._odo)
 
     def _hold(self, node: int) -> None:
@@ -231,14 +228,18 @@ class Explorer:
         b = self.tracer.behaviour
         if b in (Behaviour.ACCESS, Behaviour.BACKOFF):
             if self._detour_from is None:
-                self._detour_from = (odo.x_m, odo.y_m, odo.distance_m)
+                self._detour_from = (odo.x_m, odo.y_m, odo.distance_m, self.detoured)
             self.detoured = True
         elif self._detour_from is not None and b is Behaviour.TRACE:
-            x, y, d0 = self._detour_from
+            x, y, d0, off_already = self._detour_from
             gap = math.hypot(odo.x_m - x, odo.y_m - y)
-            if gap <= self.p.rejoin_m:
+            # Back on an edge close by after a short excursion that began on the edge: the
+            # same edge, and the few decimetres of wandering are within the length tolerance.
+            # After a long one the length says nothing any more: the robot does not know
+            # where it came from.
+            short = gap <= self.p.rejoin_m and odo.distance_m - d0 - gap <= self.p.rejoin_m
+            if short and not off_already:
                 self.detoured = False
-                self.excess_m += max(0.0, odo.distance_m - d0 - gap)
             self._detour_from = None
 
     def unexplored(self) -> list[tuple[int, int]]:
@@ -269,7 +270,6 @@ class Explorer:
         self.detoured = False
         self._detour_from = None
         self.partial_m = 0.0
-        self.excess_m = 0.0
         return (port - rot) % deg
 
     def _arrive(self, ev: MeetPointReached) -> tuple[int, int]:
@@ -340,13 +340,12 @@ class Explorer:
             if length is not None:
                 self.map.add_measurement(e, length)
             self.partial_m = 0.0
-            self.excess_m = 0.0
             return w, k
         short = length is not None and length < edge.length_m - tol.length_abs_m
         if short and self._through_port(ev) is not None:
             # A weak meet point halfway (section VII-B): it did not show when the edge was
             # first traced. Not a node of the map; the edge goes on straight ahead.
-            self.partial_m, self.excess_m = length, 0.0
+            self.partial_m = length
             self._note(f"weak meet point passed on edge {e} ({f}-{w})")
             return f, 0
         # Homed past a weak meet point: one edge further than planned (section V-B).
@@ -362,7 +361,6 @@ class Explorer:
         if len(found) == 1:
             self._note(f"expected node {w}, recognised node {found[0][0]} one edge further")
             self.partial_m = 0.0
-            self.excess_m = 0.0
             return found[0]
         wn = self.map.node(w)
         why = (
@@ -426,7 +424,6 @@ class Explorer:
                 f"{len(self.hyps.live)} open"
             )
         self.partial_m = 0.0
-        self.excess_m = 0.0
         return node, 0
 
     def _lost(self, ev: MeetPointReached, why: str) -> tuple[int, int]:
@@ -442,7 +439,6 @@ class Explorer:
             self.hyps.fragment.add(node)
         self.plan = []
         self.partial_m = 0.0
-        self.excess_m = 0.0
         self._note(f"lost ({why}): new node {node}, {len(fresh)} look-alike(s)")
         return node, 0
 
@@ -450,7 +446,6 @@ class Explorer:
     def _on_boundary(self, ev: BoundaryReached) -> None:
         length = self._edge_length(ev.edge_length_m)
         self.partial_m = 0.0
-        self.excess_m = 0.0
         tol = self.p.tol
         if self.leaving is None or self.detoured:
             self._abandon_hypotheses()
@@ -668,10 +663,8 @@ class Explorer:
 
     def _edge_length(self, measured: float | None) -> float | None:
         """The edge's length from the encoders: the stretch before a weak meet point passed
-        through, plus this stretch, less what detours that rejoined the edge added."""
-        if measured is None:
-            return None
-        return max(0.0, measured + self.partial_m - self.excess_m)
+        through, plus this stretch."""
+        return None if measured is None else measured + self.partial_m
 
     def _size(self) -> str:
         return f"{len(self.map.nodes())} nodes, {len(self.map.edges())} edges"

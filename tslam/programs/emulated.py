@@ -1,8 +1,9 @@
 """A Nomad 200 driver talking to ``tslam emulate nomad200`` in another process, for one run.
 
-``tslam sim --backend nomad200-emulated`` uses this: the emulator serves a pty in lockstep
-mode, so the run goes through the whole real path (driver, pyserial, termios, a pty, the
-protocol, the emulator, the simulator) and still repeats exactly, seed for seed.
+The emulator serves a pty in lockstep mode, so a run goes through the whole real path (driver,
+pyserial, termios, a pty, the protocol, the emulator, the simulator) across processes and still
+repeats exactly, seed for seed. (``tslam sim --backend nomad200-emulated`` hosts the same
+emulator on a thread instead, to score against the true pose: see ``sim_backends``.)
 """
 
 from __future__ import annotations
