@@ -28,20 +28,29 @@ def test_watchdog_stops_the_drive_once_per_stall():
     assert dog.check() and dog.stalls == 2
 
 
-def test_inbox_hands_commands_to_the_loop_and_returns_its_answer():
-    inbox = Inbox(answer_within_s=10.0)
+def submit_and_serve(inbox: Inbox, cmd: Command, apply) -> tuple[CommandReply, list]:
+    """Submit from a thread, as the link does, and serve from this one, as the loop does."""
     inbox.open = True
     replies: list[CommandReply] = []
-    t = threading.Thread(target=lambda: replies.append(inbox.submit(Command("1", "pause"))))
+    t = threading.Thread(target=lambda: replies.append(inbox.submit(cmd)))
     t.start()
     served: list[CommandReply] = []
     for _ in range(1000):
-        served += inbox.serve(lambda c: CommandReply(c.id, True, "done by the loop"))
+        served += inbox.serve(apply)
         if served:
             break
         threading.Event().wait(0.01)
     t.join(10)
-    assert replies == [CommandReply("1", True, "done by the loop")] == served
+    return replies[0], served
+
+
+def test_inbox_hands_commands_to_the_loop_and_returns_its_answer():
+    reply, served = submit_and_serve(
+        Inbox(answer_within_s=10.0),
+        Command("1", "pause"),
+        lambda c: CommandReply(c.id, True, "done by the loop"),
+    )
+    assert [reply] == [CommandReply("1", True, "done by the loop")] == served
 
 
 def test_inbox_refuses_what_it_cannot_carry_out():
@@ -57,14 +66,8 @@ def test_inbox_refuses_what_it_cannot_carry_out():
 
 def test_inbox_turns_a_bug_into_a_refusal():
     inbox = Inbox(answer_within_s=10.0)
-    inbox.open = True
-    out: list[CommandReply] = []
-    t = threading.Thread(target=lambda: out.append(inbox.submit(Command("1", "explore"))))
-    t.start()
-    while not inbox.serve(lambda c: 1 / 0):
-        threading.Event().wait(0.01)
-    t.join(10)
-    assert out[0].accepted is False and "internal error" in out[0].reason
+    reply, _ = submit_and_serve(inbox, Command("1", "explore"), lambda c: 1 / 0)
+    assert reply.accepted is False and "internal error" in reply.reason
 
 
 def test_notifier_speaks_sd_notify(tmp_path):

@@ -210,9 +210,7 @@ class Explorer:
             self._hold(node)
             return
         self.held = self.done = False
-        self.leaving = (node, port)
-        self.detoured = False
-        self.partial_m = 0.0
+        self._leave(node, port)
         self.tracer.depart(ev.departures_rad[(port - rot) % deg], self._odo)
 
     def _hold(self, node: int) -> None:
@@ -266,11 +264,15 @@ class Explorer:
         if port is None:
             self._hold(node)
             return ev.arrival_index or 0
+        self._leave(node, port)
+        return (port - rot) % deg
+
+    def _leave(self, node: int, port: int) -> None:
+        """Start on a new edge: whatever the last one left behind does not carry over."""
         self.leaving = (node, port)
         self.detoured = False
         self._detour_from = None
         self.partial_m = 0.0
-        return (port - rot) % deg
 
     def _arrive(self, ev: MeetPointReached) -> tuple[int, int]:
         """Which map node the robot has homed onto, and the rotation from the event's

@@ -83,7 +83,6 @@ class Daemon:
                 f"{len(tmap.edges())} edges; localizing against it"
             )
         mirror = MapMirror(cfg.robot, self.epoch, explorer)
-        pending_goal = self.orders.goal
         with contextlib.ExitStack() as stack:
             stack.callback(self._shutdown, explorer)
             if cfg.link_enabled:
@@ -97,7 +96,7 @@ class Daemon:
                 self.inbox.open = True
                 self.notifier.ready(f"exploring as {cfg.robot}")
                 try:
-                    pending_goal = self._loop(backend, explorer, mirror, dog, pending_goal)
+                    self._loop(backend, explorer, mirror, dog)
                 except HalError as exc:
                     self.error = f"{type(exc).__name__}: {exc}"
                     self._publish_event(explorer, "error", self.error)
@@ -111,9 +110,9 @@ class Daemon:
         explorer: Explorer,
         mirror: MapMirror,
         dog: Watchdog,
-        pending_goal: int | None,
-    ) -> int | None:
+    ) -> None:
         cfg = self.cfg
+        pending_goal = self.orders.goal
         clock = backend.clock
         period = 1.0 / cfg.rate_hz
         simulated = cfg.backend["backend"] == "sim"
@@ -179,12 +178,8 @@ class Daemon:
             elif next_t < clock.now() - period:
                 next_t = clock.now()  # overran: do not try to catch up with a burst
             clock.sleep(max(0.0, next_t - clock.now()))
-        return pending_goal
 
     # ------------------------------------------------------------------ commands
-    def _on_link_command(self, cmd: Command) -> CommandReply:
-        return self.inbox.submit(cmd)
-
     def _command(self, cmd: Command, explorer: Explorer, backend: Any) -> CommandReply:
         orders, reason = apply_command(cmd, explorer, self.orders)
         if reason is not None:
@@ -203,7 +198,7 @@ class Daemon:
 
         return RobotLink(
             self.cfg.robot, self.cfg.link, self.epoch,
-            snapshot=mirror.snapshot, on_command=self._on_link_command,
+            snapshot=mirror.snapshot, on_command=self.inbox.submit,
         )  # fmt: skip
 
     def _publish_event(
