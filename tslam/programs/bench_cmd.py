@@ -20,11 +20,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     ctl.add_argument("--world", default="fig14", help="world to trace in (fig14)")
     ctl.add_argument("--steps", type=int, default=3000, help="control steps to time (3000)")
     ctl.set_defaults(run=_bench_control)
-    from tslam.programs import bench_can, bench_link, bench_serial
+    from tslam.programs import bench_can, bench_explore, bench_link, bench_serial
 
     bench_serial.add_parser(bsub)
     bench_can.add_parser(bsub)
     bench_link.add_parser(bsub)
+    bench_explore.add_parser(bsub)
 
 
 def _bench_control(args: argparse.Namespace) -> int:
