@@ -30,7 +30,6 @@ from typing import Any, NamedTuple
 from tslam.programs.cli import UserError
 
 DEFAULT_SEEDS = (1, 2, 3)
-SEEDED_KINDS = ("office", "maze")
 _SEED_RE = re.compile(r"[0-9]+")
 
 #: Where an incomplete map is accepted: fig15 is symmetric, so once the odometry drifts no
@@ -157,12 +156,10 @@ def _split(option: str, text: str) -> list[str]:
 
 def _check_world(name: str) -> None:
     """Built-ins only: a bench is meant to be rerun and compared, so no ad-hoc world files."""
-    from sim_backend.builtin_worlds import builtin_names
+    from sim_backend.builtin_worlds import builtin_names, is_builtin_name
 
-    kind, sep, seed = name.partition(":")
-    if sep and kind in SEEDED_KINDS and _SEED_RE.fullmatch(seed):
-        return
-    if not sep and name in default_worlds():
+    _, sep, seed = name.partition(":")
+    if is_builtin_name(name) and (not sep or _SEED_RE.fullmatch(seed)):
         return
     raise UserError(f"--worlds: unknown world {name!r} (choose from {', '.join(builtin_names())})")
 
