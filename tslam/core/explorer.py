@@ -28,7 +28,7 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import networkx as nx
 
@@ -122,6 +122,7 @@ class Explorer:
         self.here: int | None = None  # the node the robot is at or last left
         self.leaving: tuple[int, int] | None = None  # (node, port) being traced
         self.detoured = False  # the tracer left the edge since, and did not rejoin it
+        self.disturbed = False  # ... or left it and rejoined it: the length is only a bound
         self._detour_from: tuple[float, float, float, bool] | None = None
         self.partial_m = 0.0  # length before a weak meet point passed through
         self.plan: list[Step] = []
@@ -227,7 +228,7 @@ class Explorer:
         if b in (Behaviour.ACCESS, Behaviour.BACKOFF):
             if self._detour_from is None:
                 self._detour_from = (odo.x_m, odo.y_m, odo.distance_m, self.detoured)
-            self.detoured = True
+            self.detoured = self.disturbed = True
         elif self._detour_from is not None and b is Behaviour.TRACE:
             x, y, d0, off_already = self._detour_from
             gap = math.hypot(odo.x_m - x, odo.y_m - y)
@@ -270,7 +271,7 @@ class Explorer:
     def _leave(self, node: int, port: int) -> None:
         """Start on a new edge: whatever the last one left behind does not carry over."""
         self.leaving = (node, port)
-        self.detoured = False
+        self.detoured = self.disturbed = False
         self._detour_from = None
         self.partial_m = 0.0
 
@@ -325,21 +326,24 @@ class Explorer:
     def _expected(
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, e: int, length: float | None
     ) -> tuple[int, int]:
-        tol = self.p.tol
+        tol = self._tol()
         edge = self.map.edge(e)
         w, q = edge.other_end(f, j)
         a = ev.arrival_index
         assert a is not None
         k = self._match(seen, a, w, q, length, edge.length_m)
-        if k is None and self.map.node(f).kind == "boundary" and self.map.node(w).degree == (
-            ev.degree
+        if (
+            k is None
+            and self.map.node(f).kind == "boundary"
+            and self.map.node(w).degree == ev.degree
+            and tol.length_ok(length, edge.length_m)
         ):
             # Back from a dead end there is one place to arrive at; only the signature's
             # noisier parts (clearance, a departure angle) disagree: trust the topology.
             k = (q - a) % ev.degree
             self._note(f"node {w} confirmed by topology alone (back from boundary {f})")
         if k is not None:
-            if length is not None:
+            if length is not None and not self.disturbed:
                 self.map.add_measurement(e, length)
             self.partial_m = 0.0
             return w, k
@@ -378,14 +382,14 @@ class Explorer:
         """The rotation under which ``seen``, arrived at by index ``a``, is node ``w`` reached by
         its port ``q`` after an edge of ``mapped`` metres; None if it is not."""
         pred = Prediction(w, q, mapped, self.map.node(w).kind)
-        return arrival_matches(self.map, seen, a, pred, length, self.p.tol)
+        return arrival_matches(self.map, seen, a, pred, length, self._tol())
 
     def _new_edge(
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, length: float | None
     ) -> tuple[int, int]:
         a = ev.arrival_index
         assert a is not None
-        tol = self.p.tol
+        tol = self._tol()
         # What each open hypothesis predicted for this edge, checked before the map changes.
         survivors: list[Hypothesis] = []
         confirmed: list[tuple[Hypothesis, int, int]] = []
@@ -436,7 +440,7 @@ class Explorer:
         tol = self.p.tol
         fresh = candidates(self.map, self.map.signature(node), tol, {node}, None)
         for c, k in fresh:
-            self.hyps.live.append(Hypothesis({node: (c, k)}))
+            self.hyps.live.append(Hypothesis({node: (c, k)}, lost_start=True))
         if fresh:
             self.hyps.fragment.add(node)
         self.plan = []
@@ -448,11 +452,11 @@ class Explorer:
     def _on_boundary(self, ev: BoundaryReached) -> None:
         length = self._edge_length(ev.edge_length_m)
         self.partial_m = 0.0
-        tol = self.p.tol
+        tol = self._tol()
         if self.leaving is None or self.detoured:
             self._abandon_hypotheses()
             b = self._add_boundary(ev)
-            self.leaving, self.detoured = (b, 0), False
+            self.leaving, self.detoured, self.disturbed = (b, 0), False, False
             return
         f, j = self.leaving
         e = self.map.node(f).ports[j]
@@ -460,15 +464,15 @@ class Explorer:
             edge = self.map.edge(e)
             w, q = edge.other_end(f, j)
             if self.map.node(w).kind == "boundary" and tol.length_ok(length, edge.length_m):
-                if length is not None:
+                if length is not None and not self.disturbed:
                     self.map.add_measurement(e, length)
-                self.leaving = (w, q)
+                self.leaving, self.disturbed = (w, q), False
                 return
             self._abandon_hypotheses()
             self.plan = []
             b = self._add_boundary(ev)
             self._note(f"expected node {w} after edge {e}, found a boundary: node {b}")
-            self.leaving, self.detoured = (b, 0), False
+            self.leaving, self.detoured, self.disturbed = (b, 0), False, False
             return
         survivors = []
         confirmed = []
@@ -483,14 +487,14 @@ class Explorer:
         self.map.connect(f, j, b, 0, 0.0 if length is None else length)
         for h, w in confirmed:
             h.mapping[b] = (w, 0)
-            h.confirmed += 1
+            h.dead_ends += 1
         survivors = self._age(survivors, {id(h) for h, _ in confirmed})
         self.hyps.live = survivors
         if survivors:
             self.hyps.fragment.add(b)
         else:
             self.hyps.clear()
-        self.leaving = (b, 0)
+        self.leaving, self.disturbed = (b, 0), False
 
     def _age(self, hyps: list[Hypothesis], spoke: set[int]) -> list[Hypothesis]:
         out = []
@@ -509,13 +513,15 @@ class Explorer:
             return {}
         # A hypothesis no prediction has tested yet is in the same position as "all of it is
         # new": possible, unrefuted, unsupported. Only tested hypotheses compete.
-        tested = [h for h in self.hyps.live if h.confirmed > 0]
-        if len(tested) == 1 and tested[0].confirmed >= self.p.merge_evidence:
+        tested = [h for h in self.hyps.live if h.tested]
+        if len(tested) == 1 and tested[0].proven(self.p.merge_evidence):
             return self._merge(tested[0])
         if node in self.hyps.fragment and separating_port(self.map, self.hyps, node) is not None:
             return {}
         if len(tested) == 1:
-            return self._merge(tested[0])
+            # Not proven, and nothing to test from here: keep it open for a later edge to
+            # test; it ages out if none does. Never merge on a guess.
+            return {}
         self._abandon_hypotheses()
         return {}
 
@@ -525,7 +531,7 @@ class Explorer:
         explored (that would unroll a symmetric building for ever)."""
         # Only hypotheses some prediction has confirmed count: a look-alike whose departures
         # are all unexplored could not be tested yet, which is no ambiguity.
-        tested = [h for h in self.hyps.live if h.confirmed > 0]
+        tested = [h for h in self.hyps.live if h.tested]
         for x in sorted(self.hyps.fragment):
             if not self.map.has_node(x):
                 continue
@@ -662,6 +668,9 @@ class Explorer:
     def _add_boundary(self, ev: BoundaryReached) -> int:
         truth = self.truth() if self.truth else None
         return self.map.add_boundary(ev.clearance_m, (ev.x_m, ev.y_m), truth=truth)
+
+    def _tol(self) -> Tolerances:
+        return replace(self.p.tol, at_least=True) if self.disturbed else self.p.tol
 
     def _edge_length(self, measured: float | None) -> float | None:
         """The edge's length from the encoders: the stretch before a weak meet point passed

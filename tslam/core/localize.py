@@ -30,11 +30,17 @@ class Tolerances:
     angle_rad: float = math.radians(25.0)
     length_abs_m: float = 0.35  # encoder lengths include homing and detours ...
     length_rel: float = 0.12  # ... so the tolerance grows with the edge
+    # The robot left the edge and came back to it on the way: the wandering only adds to
+    # the encoder length, so a shorter measurement still refutes and a longer one does not.
+    at_least: bool = False
 
     def length_ok(self, measured: float | None, mapped: float) -> bool:
         if measured is None:
             return True
-        return abs(measured - mapped) <= self.length_abs_m + self.length_rel * mapped
+        slack = self.length_abs_m + self.length_rel * mapped
+        if self.at_least:
+            return measured >= mapped - slack
+        return abs(measured - mapped) <= slack
 
 
 @dataclass
@@ -43,8 +49,22 @@ class Hypothesis:
     ``(j + k) % degree`` of the old node (the map's merge convention)."""
 
     mapping: dict[int, tuple[int, int]]
-    confirmed: int = 0
+    confirmed: int = 0  # predicted meet points found where and as predicted
+    dead_ends: int = 0  # predicted boundary points found: weak, every dead end looks alike
     silent_arrivals: int = 0  # arrivals in a row it made no prediction for
+    lost_start: bool = False  # began at a node reached off the graph: no arrival port to test
+
+    @property
+    def tested(self) -> bool:
+        return self.confirmed + self.dead_ends > 0
+
+    def proven(self, merge_evidence: int) -> bool:
+        """Enough evidence to merge, if no other hypothesis is left. Dead ends count half,
+        and a hypothesis that began off the graph needs one confirmation more: mirror-image
+        corridors (fig16) agree on dead ends, and a node reached off the graph was matched on
+        its signature alone."""
+        need = merge_evidence + (1 if self.lost_start else 0)
+        return self.confirmed >= 1 and self.confirmed + 0.5 * self.dead_ends >= need
 
     def image_port(self, tmap: TopoMap, node: int, port: int) -> tuple[int, int] | None:
         if node not in self.mapping:

@@ -60,6 +60,7 @@ class TracerParams:
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
+    approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
     backoff_m: float = 0.25  # reverse this far from a contact before re-accessing ...
     backoff_mps: float = 0.1  # ... at this speed, for at most four times as long as it takes
 
@@ -120,6 +121,10 @@ class _State:
     node_distance: float | None = None  # encoder distance at the last node
     node_kind: str = ""
     last_meet: tuple[float, float] | None = None  # odometry frame
+    # Where homing began and the edge's tangent there: near a junction the two closest
+    # obstacles may belong to another of its edges, so the tangent the trace law keeps while
+    # homing wanders can point along the wrong edge. The arrival edge is the one traced in.
+    approach: tuple[float, float, float, float] | None = None  # x, y, tangent x, y
     last_seen: float = 0.0
     last_twist: Twist = field(default_factory=Twist)
 
@@ -230,6 +235,11 @@ class Tracer:
             return None
         if s.armed and self._meet_near(obs):
             s.behaviour = Behaviour.HOME
+            a = s.approach
+            if s.tangent is not None and (
+                a is None or math.hypot(odo.x_m - a[0], odo.y_m - a[1]) > p.approach_keep_m
+            ):
+                s.approach = (odo.x_m, odo.y_m, *s.tangent)
             return self._home(obs, odo, now, events)
         prev = _to_robot(s.tangent, odo) if s.tangent else None
         out = laws.trace_velocity(obs[0], obs[1], prev, p.alpha_mps, p.beta_per_s)
@@ -308,8 +318,12 @@ class Tracer:
         bearings = laws.departure_bearings(near)
         deps = sorted((odo.heading_rad + b) % TAU for b in bearings)
         arrival = None
-        if s.tangent is not None:
-            back = math.atan2(-s.tangent[1], -s.tangent[0]) % TAU
+        tangent = s.tangent
+        a = s.approach
+        if a is not None and math.hypot(odo.x_m - a[0], odo.y_m - a[1]) <= p.approach_keep_m:
+            tangent = (a[2], a[3])
+        if tangent is not None:
+            back = math.atan2(-tangent[1], -tangent[0]) % TAU
             arrival = min(range(len(deps)), key=lambda k: _angdiff(deps[k], back))
         base = deps[arrival] if arrival is not None else 0.0
         rel = tuple(sorted((d - base) % TAU for d in deps))
@@ -358,6 +372,7 @@ class Tracer:
         s.tangent = (math.cos(direction), math.sin(direction))
         s.armed = False
         s.depart_m = self.p.depart_m if distance is None else distance
+        s.approach = None
 
     def _depart(self, obs: list[Obstacle], odo: Odometry) -> tuple[float, float] | Twist | None:
         s, p = self.s, self.p

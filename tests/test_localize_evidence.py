@@ -1,0 +1,43 @@
+"""What counts as proof for a merge, and what a disturbed edge length can still refute.
+
+A false merge corrupts the map for good, so the evidence rules are pinned here: a dead end
+confirms less than a meet point (every dead end looks alike; fig16's mirror-image corridors
+agree on them), a hypothesis that began off the graph needs one confirmation more, and an
+edge on which the robot left the GVG and came back is only a lower bound on the length.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from tslam.core.localize import Hypothesis, Tolerances
+
+
+@pytest.mark.parametrize(
+    ("confirmed", "dead_ends", "lost_start", "proven"),
+    [
+        (2, 0, False, True),  # the paper's Fig. 12: two predicted meet points found
+        (1, 0, False, False),
+        (1, 1, False, False),  # a dead end is half a confirmation
+        (1, 2, False, True),
+        (0, 4, False, False),  # dead ends alone never prove a place
+        (2, 0, True, False),  # off the graph: one more
+        (3, 0, True, True),
+        (2, 2, True, True),
+    ],
+)
+def test_merge_evidence(confirmed, dead_ends, lost_start, proven):
+    h = Hypothesis({7: (3, 0)}, confirmed=confirmed, dead_ends=dead_ends, lost_start=lost_start)
+    assert h.proven(merge_evidence=2) is proven
+    assert h.tested is (confirmed + dead_ends > 0)
+
+
+def test_a_disturbed_length_refutes_only_when_too_short():
+    tol = Tolerances(length_abs_m=0.35, length_rel=0.12)
+    bound = Tolerances(length_abs_m=0.35, length_rel=0.12, at_least=True)
+    mapped = 5.0  # slack 0.35 + 0.6 = 0.95 m
+    assert tol.length_ok(5.9, mapped) and bound.length_ok(5.9, mapped)
+    assert not tol.length_ok(8.0, mapped)  # a detour of 3 m: refuted by the two-sided test
+    assert bound.length_ok(8.0, mapped)  # ... but wandering only ever adds length
+    assert not bound.length_ok(3.9, mapped)  # shorter than the edge can be: still refuted
+    assert tol.length_ok(None, mapped) and bound.length_ok(None, mapped)
