@@ -4,6 +4,7 @@ lengths."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import pytest
@@ -13,6 +14,8 @@ from sim_backend.ground_truth import compute_gvg
 from sim_backend.world_files import load_world
 from tests.graph_walk import TrueGraph, from_ground_truth, walk
 from tslam.core.explorer import Explorer
+from tslam.core.topomap import TopoMap
+from tslam.core.tracer import MeetPointReached
 
 
 def false_merges(ex: Explorer) -> int:
@@ -65,3 +68,35 @@ def test_the_loop_closes_by_topology_with_proof_not_on_first_sight():
     merged = {d for d, _, _, _ in ex.merges[0].pairs}
     assert len(merged) >= 2
 
+
+
+@pytest.mark.parametrize("cut", [2, 3])
+def test_a_restart_localizes_against_the_stored_map_and_finishes_it(cut):
+    first = Explorer(NOMAD200_LIMITS)
+    walk(triangle(), first, "A", max_arrivals=cut)
+    stored = TopoMap.from_dict(json.loads(json.dumps(first.map.to_dict())))
+    before = {n.id for n in stored.nodes()}
+    assert not first.done and stored.unexplored()
+    # The robot is back where it first started and reaches A off the graph: the stored map
+    # is the prior, so A's one look-alike, confirmed by the edge it then traces, is A.
+    second = Explorer(NOMAD200_LIMITS, tmap=stored)
+    walk(triangle(), second, "A", drift_deg_per_edge=10.0)
+    assert second.done and false_merges(second) == 0
+    assert second.merges, "the restart never localized against the stored map"
+    assert [n.kind for n in second.map.nodes()].count("meet") == 3
+    assert before <= {n.id for n in second.map.nodes()}
+
+
+def test_without_a_stored_map_one_unproven_look_alike_is_not_merged():
+    ex = Explorer(NOMAD200_LIMITS)
+    walk(triangle(), ex, "A", max_arrivals=2)
+    assert not ex._resuming
+    deps = tuple(sorted(math.radians(b) % math.tau for b in (135, 270, -45)))
+    rel = tuple((d - deps[0]) % math.tau for d in deps)
+    ex._lost(MeetPointReached(0.0, 9.0, 9.0, 1.0, 3, deps, None, rel, None), "test")
+    (h,) = ex.hyps.live
+    h.confirmed = 1  # one predicted meet point found ...
+    (old, _), = h.mapping.values()
+    assert ex._resolve(old) == {} and not ex.merges  # ... at a node that tests nothing more
+    assert ex.hyps.live == [h]  # kept open for a later edge to test
+    assert h.lost_start and not h.resumed

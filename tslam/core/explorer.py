@@ -116,6 +116,7 @@ class Explorer:
     ) -> None:
         self.p = params or ExplorerParams()
         self.map = tmap or TopoMap()
+        self._resuming = len(self.map.nodes()) > 0  # the first node is matched to the stored map
         self.tracer = Tracer(limits, tracer_params, choose=self._choose)
         self.hyps = Hypotheses()
         self.truth = truth
@@ -280,8 +281,9 @@ class Explorer:
         departure indices to its ports (index i is port ``(i + rot) % degree``)."""
         a = ev.arrival_index
         length = self._edge_length(ev.edge_length_m)
+        resuming, self._resuming = self._resuming, False
         if self.leaving is None or self.detoured or a is None:
-            return self._lost(ev, "off the graph")
+            return self._lost(ev, "off the graph", resuming)
         f, j = self.leaving
         bounced = self._bounced(ev)
         if bounced is not None:
@@ -432,15 +434,18 @@ class Explorer:
         self.partial_m = 0.0
         return node, 0
 
-    def _lost(self, ev: MeetPointReached, why: str) -> tuple[int, int]:
+    def _lost(self, ev: MeetPointReached, why: str, resuming: bool = False) -> tuple[int, int]:
         """Not knowing where the robot came from, the node goes in unattached and every old
-        node that looks like it is a hypothesis to test."""
+        node that looks like it is a hypothesis to test (``resuming``: against a stored map
+        the robot restarted in)."""
         self._abandon_hypotheses()
         node = self._add_meet(ev)
         tol = self.p.tol
         fresh = candidates(self.map, self.map.signature(node), tol, {node}, None)
         for c, k in fresh:
-            self.hyps.live.append(Hypothesis({node: (c, k)}, lost_start=True))
+            self.hyps.live.append(
+                Hypothesis({node: (c, k)}, lost_start=not resuming, resumed=resuming)
+            )
         if fresh:
             self.hyps.fragment.add(node)
         self.plan = []
@@ -519,6 +524,8 @@ class Explorer:
         if node in self.hyps.fragment and separating_port(self.map, self.hyps, node) is not None:
             return {}
         if len(tested) == 1:
+            if tested[0].resumed:
+                return self._merge(tested[0])
             # Not proven, and nothing to test from here: keep it open for a later edge to
             # test; it ages out if none does. Never merge on a guess.
             return {}

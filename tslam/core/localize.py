@@ -53,6 +53,10 @@ class Hypothesis:
     dead_ends: int = 0  # predicted boundary points found: weak, every dead end looks alike
     silent_arrivals: int = 0  # arrivals in a row it made no prediction for
     lost_start: bool = False  # began at a node reached off the graph: no arrival port to test
+    # Began at the first node after a restart from a stored map. The robot was in the mapped
+    # building when it stopped, so the stored map is the prior: one surviving candidate that
+    # nothing more can test is the paper's "one candidate remains", not a guess.
+    resumed: bool = False
 
     @property
     def tested(self) -> bool:
