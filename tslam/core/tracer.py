@@ -60,6 +60,7 @@ class TracerParams:
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
+    left_meet_m: float = 0.35  # ... and one this close is the meet point just left: no homing
     approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
     backoff_m: float = 0.25  # reverse this far from a contact before re-accessing ...
     backoff_mps: float = 0.1  # ... at this speed, for at most four times as long as it takes
@@ -121,12 +122,18 @@ class _State:
     node_distance: float | None = None  # encoder distance at the last node
     node_kind: str = ""
     last_meet: tuple[float, float] | None = None  # odometry frame
+    left_meet: tuple[float, float] | None = None  # the meet point reported last, left by an edge
     # Where homing began and the edge's tangent there: near a junction the two closest
     # obstacles may belong to another of its edges, so the tangent the trace law keeps while
     # homing wanders can point along the wrong edge. The arrival edge is the one traced in.
-    approach: tuple[float, float, float, float] | None = None  # x, y, tangent x, y
+    # Homing also wanders (a noisy third echo pulls the circumcentre about), so the edge's
+    # length is the encoder distance to where homing began plus the straight step from there.
+    approach: tuple[float, float, float, float, float] | None = None  # x, y, tangent, distance
     last_seen: float = 0.0
     last_twist: Twist = field(default_factory=Twist)
+    # Which way the base last translated: a contact that stops the robot zeroes the command,
+    # and the way out is away from where it was going, not always backwards.
+    last_v_sign: float = 1.0
 
 
 class Tracer:
@@ -164,7 +171,7 @@ class Tracer:
             self.s.behaviour = Behaviour.BACKOFF
             self.s.since = now_s
             self.s.depart_from = (odo.x_m, odo.y_m)
-            self.s.depart_dir = -1.0 if self.s.last_twist.v_mps >= 0.0 else 1.0
+            self.s.depart_dir = -self.s.last_v_sign
         v = self._law(obs, odo, now_s, events)
         if v is None:
             twist = Twist(0.0, 0.0, 0.0)
@@ -173,6 +180,8 @@ class Tracer:
         else:
             twist = laws.to_twist(v, self.limits)
         self.s.last_twist = twist
+        if twist.v_mps != 0.0:
+            self.s.last_v_sign = math.copysign(1.0, twist.v_mps)
         return twist, events
 
     # ------------------------------------------------------------------ behaviours
@@ -233,13 +242,13 @@ class Tracer:
         if obs[1].distance_m - obs[0].distance_m > p.off_edge_m:
             s.behaviour = Behaviour.ACCESS  # these two are not the edge's obstacles
             return None
-        if s.armed and self._meet_near(obs):
+        if s.armed and self._meet_near(obs, odo):
             s.behaviour = Behaviour.HOME
             a = s.approach
             if s.tangent is not None and (
                 a is None or math.hypot(odo.x_m - a[0], odo.y_m - a[1]) > p.approach_keep_m
             ):
-                s.approach = (odo.x_m, odo.y_m, *s.tangent)
+                s.approach = (odo.x_m, odo.y_m, *s.tangent, odo.distance_m)
             return self._home(obs, odo, now, events)
         prev = _to_robot(s.tangent, odo) if s.tangent else None
         out = laws.trace_velocity(obs[0], obs[1], prev, p.alpha_mps, p.beta_per_s)
@@ -249,11 +258,22 @@ class Tracer:
         s.tangent = _to_odom(t, odo)
         return v
 
-    def _meet_near(self, obs: list[Obstacle]) -> bool:
-        if not laws.equidistant(obs, 3, self.p.meet_tol_m):
+    def _meet_near(self, obs: list[Obstacle], odo: Odometry) -> bool:
+        s, p = self.s, self.p
+        if not laws.equidistant(obs, 3, p.meet_tol_m):
             return False
         c = laws.circumcentre(*obs[:3])
-        return c is not None and math.hypot(*c) <= self.p.meet_radius_m
+        if c is None or math.hypot(*c) > p.meet_radius_m:
+            return False
+        # Leaving a wide junction, one noisy echo can re-arm detection while the three
+        # obstacles are still nearly equidistant: homing then pulls the robot back onto the
+        # meet point it has just left, and the departure is lost.
+        if s.left_meet is None:
+            return True
+        cx, cy = _to_odom(c, odo)
+        return math.hypot(odo.x_m + cx - s.left_meet[0], odo.y_m + cy - s.left_meet[1]) > (
+            p.left_meet_m
+        )
 
     def _new_meet_ahead(self, obs: list[Obstacle], odo: Odometry) -> bool:
         """Right after a meet point the three closest obstacles stay nearly equidistant; the
@@ -319,8 +339,8 @@ class Tracer:
         deps = sorted((odo.heading_rad + b) % TAU for b in bearings)
         arrival = None
         tangent = s.tangent
-        a = s.approach
-        if a is not None and math.hypot(odo.x_m - a[0], odo.y_m - a[1]) <= p.approach_keep_m:
+        a = self._approach(odo)
+        if a is not None:
             tangent = (a[2], a[3])
         if tangent is not None:
             back = math.atan2(-tangent[1], -tangent[0]) % TAU
@@ -333,7 +353,7 @@ class Tracer:
             now, odo.x_m, odo.y_m, clearance, len(deps), tuple(deps), arrival, rel, length
         )
         events.append(ev)
-        s.last_meet = (odo.x_m, odo.y_m)
+        s.last_meet = s.left_meet = (odo.x_m, odo.y_m)
         k = self.choose(ev)
         self._start_depart(deps[k], odo)
 
@@ -344,6 +364,7 @@ class Tracer:
         length = self._edge_done(odo, now, "boundary", events)
         events.append(BoundaryReached(now, odo.x_m, odo.y_m, obs[0].distance_m, length))
         assert s.tangent is not None
+        s.left_meet = None  # the way back leads to it: homing onto it is wanted now
         back = math.atan2(-s.tangent[1], -s.tangent[0])
         self._start_depart(back, odo, distance=0.0)
 
@@ -354,10 +375,20 @@ class Tracer:
         length = None
         if s.node_distance is not None:
             length = odo.distance_m - s.node_distance
+            a = self._approach(odo) if kind == "meet" else None
+            if a is not None and a[4] >= s.node_distance:
+                length = a[4] - s.node_distance + math.hypot(odo.x_m - a[0], odo.y_m - a[1])
             events.append(EdgeTraversed(now, length, s.node_kind, kind))
         s.node_distance = odo.distance_m
         s.node_kind = kind
         return length
+
+    def _approach(self, odo: Odometry) -> tuple[float, float, float, float, float] | None:
+        """Where homing onto this meet point began, if it began close enough to count."""
+        a = self.s.approach
+        if a is None or math.hypot(odo.x_m - a[0], odo.y_m - a[1]) > self.p.approach_keep_m:
+            return None
+        return a
 
     def depart(self, direction_rad: float, odo: Odometry) -> None:
         """Leave the meet point the robot stands at along ``direction_rad`` (odometry frame):
