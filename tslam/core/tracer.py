@@ -61,6 +61,7 @@ class TracerParams:
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
     left_meet_m: float = 0.35  # ... and one this close is the meet point just left: no homing
+    left_meet_travel_m: float = 2.0  # ... unless the robot has travelled this far since
     approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
     backoff_m: float = 0.25  # reverse this far from a contact before re-accessing ...
     backoff_mps: float = 0.1  # ... at this speed, for at most four times as long as it takes
@@ -244,10 +245,7 @@ class Tracer:
             return None
         if s.armed and self._meet_near(obs, odo):
             s.behaviour = Behaviour.HOME
-            a = s.approach
-            if s.tangent is not None and (
-                a is None or math.hypot(odo.x_m - a[0], odo.y_m - a[1]) > p.approach_keep_m
-            ):
+            if s.tangent is not None and self._approach(odo) is None:
                 s.approach = (odo.x_m, odo.y_m, *s.tangent, odo.distance_m)
             return self._home(obs, odo, now, events)
         prev = _to_robot(s.tangent, odo) if s.tangent else None
@@ -268,8 +266,9 @@ class Tracer:
         # Leaving a wide junction, one noisy echo can re-arm detection while the three
         # obstacles are still nearly equidistant: homing then pulls the robot back onto the
         # meet point it has just left, and the departure is lost.
-        if s.left_meet is None:
-            return True
+        gone = odo.distance_m - (s.node_distance or 0.0)
+        if s.left_meet is None or gone > p.left_meet_travel_m:
+            return True  # a loop edge may lead back to it: after this much travel, home
         cx, cy = _to_odom(c, odo)
         return math.hypot(odo.x_m + cx - s.left_meet[0], odo.y_m + cy - s.left_meet[1]) > (
             p.left_meet_m
