@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import random
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from tslam.core.explorer import Explorer
@@ -57,8 +58,13 @@ def walk(
     drift_deg_per_edge: float = 3.0,
     noise: float = 0.0,
     seed: int = 1,
+    misread: Callable[[str, int | None, int], list[float] | None] | None = None,
 ) -> list[str]:
-    """Run the explorer over ``graph`` from ``start``; returns the true nodes visited."""
+    """Run the explorer over ``graph`` from ``start``; returns the true nodes visited.
+
+    ``misread(node, true arrival port, visits so far)`` may return other bearings (degrees,
+    true frame) for the tracer to report at that arrival: a junction read with an edge more
+    or fewer. Departure indices then map to the true ports by nearest bearing."""
     rng = random.Random(seed)
     heading_err = 0.0
     at, came_by, length = start, arrival_port, None
@@ -68,11 +74,17 @@ def walk(
     for _ in range(max_arrivals):
         _, clr, deps, x, y = graph.nodes[at]
         where[:] = [x, y]
+        read = misread(at, came_by, visited.count(at)) if misread else None
         visited.append(at)
-        seen = tuple((d - heading_err) % TAU for d in deps)
+        shown = deps if read is None else tuple(math.radians(b) % TAU for b in read)
+        seen = tuple((d - heading_err) % TAU for d in shown)
         order = sorted(range(len(seen)), key=lambda i: seen[i])
         obs = tuple(seen[i] for i in order)
-        arr = None if came_by is None else order.index(came_by)
+        # The true port each reported departure leads along (nearest bearing).
+        true_port = [_nearest(deps, shown[i]) for i in order]
+        arr = None
+        if came_by is not None:
+            arr = min(range(len(obs)), key=lambda i: _angdiff(shown[order[i]], deps[came_by]))
         ev = MeetPointReached(
             0.0, x, y, clr + rng.uniform(-noise, noise), len(obs), obs, arr,
             tuple((d - obs[arr or 0]) % TAU for d in obs), length,
@@ -81,7 +93,7 @@ def walk(
         k = explorer._choose(ev)
         if explorer.held:  # done, or standing at the node it was sent to
             break
-        port = order[k]
+        port = true_port[k]
         nxt, nport, length = graph.ends[(at, port)]
         length *= 1.0 + rng.uniform(-noise, noise)
         heading_err += math.radians(drift_deg_per_edge)
@@ -118,3 +130,11 @@ def from_ground_truth(gvg: object) -> TrueGraph:
             g.edge(str(n.id), math.degrees(a), str(other), math.degrees(ob), edge.length_m)
             g._done |= {(n.id, e), (other, e)}
     return g
+
+
+def _angdiff(a: float, b: float) -> float:
+    return abs((a - b + math.pi) % TAU - math.pi)
+
+
+def _nearest(deps: tuple[float, ...], bearing: float) -> int:
+    return min(range(len(deps)), key=lambda i: _angdiff(deps[i], bearing))

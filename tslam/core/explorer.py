@@ -44,6 +44,8 @@ from tslam.core.localize import (
     predict,
     separating_port,
 )
+from tslam.core.placements import other_placements
+from tslam.core.portmap import PortMap, match_by_angle
 from tslam.core.signature import Signature
 from tslam.core.topomap import MapError, Step, TopoMap
 from tslam.core.tracer import (
@@ -131,11 +133,11 @@ class Explorer:
         self.done = False
         self.goal: int | None = None  # a node an operator sent the robot to
         self.held = False  # standing at a meet point: done, or at its goal
-        self._at: tuple[MeetPointReached, int, int] | None = None  # where held: event, node, rot
+        self._at: tuple[MeetPointReached, int, PortMap] | None = None  # where held
         self.merges: list[MergeRecord] = []
         self.notes: list[Note] = []
         self.bounces: dict[tuple[int, int], int] = {}
-        self._last_visit: tuple[int, tuple[float, ...], int, float, float] | None = None
+        self._last_visit: tuple[int, tuple[float, ...], PortMap, float, float] | None = None
         self._now = 0.0
         self._odo: Odometry | None = None
 
@@ -204,16 +206,14 @@ class Explorer:
         """Leave the meet point the robot is held at, if there is now somewhere to go."""
         if not self.held or self._at is None or self._odo is None:
             return
-        ev, node, rot = self._at
-        deg = ev.degree
-        arrival = None if ev.arrival_index is None else (ev.arrival_index + rot) % deg
-        port = self._next_port(node, arrival)
+        ev, node, pm = self._at
+        port = self._next_port(node, pm.arrival)
         if port is None:
             self._hold(node)
             return
         self.held = self.done = False
         self._leave(node, port)
-        self.tracer.depart(ev.departures_rad[(port - rot) % deg], self._odo)
+        self.tracer.depart(ev.departures_rad[pm.index[port]], self._odo)
 
     def _hold(self, node: int) -> None:
         self.held = True
@@ -248,8 +248,7 @@ class Explorer:
 
     # ------------------------------------------------------------------ meet points
     def _choose(self, ev: MeetPointReached) -> int:
-        node, rot = self._arrive(ev)
-        deg = ev.degree
+        node, pm = self._arrive(ev)
         if self.partial_m > 0 and self.leaving is not None and self.leaving[0] == node:
             through = self._through_port(ev)
             assert through is not None  # _expected only passes through where there is one
@@ -257,17 +256,16 @@ class Explorer:
         renamed = self._resolve(node)
         if node in renamed:
             node, shift = renamed[node]
-            rot = (rot + shift) % deg
+            pm = pm.renamed(shift)
         self.here = node
-        self._last_visit = (node, ev.departures_rad, rot, ev.x_m, ev.y_m)
-        self._at = (ev, node, rot)
-        arrival = None if ev.arrival_index is None else (ev.arrival_index + rot) % deg
-        port = self._next_port(node, arrival)
+        self._last_visit = (node, ev.departures_rad, pm, ev.x_m, ev.y_m)
+        self._at = (ev, node, pm)
+        port = self._next_port(node, pm.arrival)
         if port is None:
             self._hold(node)
             return ev.arrival_index or 0
         self._leave(node, port)
-        return (port - rot) % deg
+        return pm.index[port]
 
     def _leave(self, node: int, port: int) -> None:
         """Start on a new edge: whatever the last one left behind does not carry over."""
@@ -276,9 +274,17 @@ class Explorer:
         self._detour_from = None
         self.partial_m = 0.0
 
-    def _arrive(self, ev: MeetPointReached) -> tuple[int, int]:
-        """Which map node the robot has homed onto, and the rotation from the event's
-        departure indices to its ports (index i is port ``(i + rot) % degree``)."""
+    def _arrive(self, ev: MeetPointReached) -> tuple[int, PortMap]:
+        """Which map node the robot has homed onto, and which of the event's departures is
+        which of its ports."""
+        node, rot = self._identify(ev)
+        if isinstance(rot, PortMap):
+            return node, rot
+        return node, PortMap.rotation(rot, ev.degree, ev.arrival_index)
+
+    def _identify(self, ev: MeetPointReached) -> tuple[int, int | PortMap]:
+        """The node, and the rotation (event index i is port ``(i + rot) % degree``) or, for
+        a junction read with another degree, the port map."""
         a = ev.arrival_index
         length = self._edge_length(ev.edge_length_m)
         resuming, self._resuming = self._resuming, False
@@ -294,11 +300,11 @@ class Explorer:
             return self._expected(ev, seen, f, j, e, length)
         return self._new_edge(ev, seen, f, j, length)
 
-    def _bounced(self, ev: MeetPointReached) -> tuple[int, int] | None:
+    def _bounced(self, ev: MeetPointReached) -> tuple[int, PortMap] | None:
         lv, p = self._last_visit, self.p
         if lv is None or self.leaving is None or ev.edge_length_m is None:
             return None
-        node, deps, rot, x, y = lv
+        node, deps, pm, x, y = lv
         if (
             node != self.leaving[0]
             or not self.map.has_node(node)
@@ -323,11 +329,14 @@ class Explorer:
         if self.bounces[key] > p.bounce_retries and self.map.node(key[0]).ports[key[1]] is None:
             self.frozen.add(key)
         self._note(f"back at node {node}: departure {key[1]} could not be held")
-        return node, (rot + shift) % ev.degree
+        pm = pm.shifted_events(shift, ev.degree)
+        a = ev.arrival_index
+        arrival = next((p for p, i in enumerate(pm.index) if i == a), None)
+        return node, PortMap(pm.index, arrival)
 
     def _expected(
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, e: int, length: float | None
-    ) -> tuple[int, int]:
+    ) -> tuple[int, int | PortMap]:
         tol = self._tol()
         edge = self.map.edge(e)
         w, q = edge.other_end(f, j)
@@ -349,6 +358,16 @@ class Explorer:
                 self.map.add_measurement(e, length)
             self.partial_m = 0.0
             return w, k
+        pm = self._read_otherwise(ev, w, q, length, edge.length_m)
+        if pm is not None:
+            if length is not None and not self.disturbed:
+                self.map.add_measurement(e, length)
+            self.partial_m = 0.0
+            self._note(
+                f"node {w} confirmed by edge {e} although read with degree {ev.degree}, "
+                f"not {self.map.node(w).degree}"
+            )
+            return w, pm
         short = length is not None and length < edge.length_m - tol.length_abs_m
         if short and self._through_port(ev) is not None:
             # A weak meet point halfway (section VII-B): it did not show when the edge was
@@ -377,6 +396,27 @@ class Explorer:
             f"{ev.clearance_m:.2f} m after {length or 0:.2f} m"
         )
         return self._lost(ev, why)
+
+    def _read_otherwise(
+        self, ev: MeetPointReached, w: int, q: int, length: float | None, mapped: float
+    ) -> PortMap | None:
+        """The port map if the meet point at the end of a known edge is its node read with
+        one edge more or fewer (section VII-B's close meet points, a weak meet point): the
+        edge's length and the clearance agree, and so do the angles of all but the edge
+        that differs."""
+        tol, wn = self._tol(), self.map.node(w)
+        if (
+            ev.arrival_index is None
+            or self.partial_m > 0
+            or length is None
+            or wn.kind != "meet"
+            or not tol.length_ok(length, mapped)
+            or abs(ev.clearance_m - wn.clearance_m) > tol.clearance_m
+        ):
+            return None
+        return match_by_angle(
+            ev.departures_rad, ev.arrival_index, wn.departures_rad, q, tol.angle_rad
+        )
 
     def _match(
         self, seen: Signature, a: int, w: int, q: int, length: float | None, mapped: float
@@ -520,7 +560,28 @@ class Explorer:
         # new": possible, unrefuted, unsupported. Only tested hypotheses compete.
         tested = [h for h in self.hyps.live if h.tested]
         if len(tested) == 1 and tested[0].proven(self.p.merge_evidence):
-            return self._merge(tested[0])
+            h = tested[0]
+            search = other_placements(self.map, h, self.p.tol)
+            if search is None:
+                self._note(f"node {node}: too many places fit the evidence to check: not merged")
+                self._abandon_hypotheses()
+                return {}
+            rivals, own_fits = search
+            if not rivals and own_fits:
+                return self._merge(h)
+            # The evidence fits elsewhere as well: those places are hypotheses too, with the
+            # same support, for the next moves to separate, or the ambiguity to record.
+            for placement in rivals:
+                self.hyps.live.append(replace(h, mapping=dict(placement), silent_arrivals=0))
+            if rivals:
+                self._note(
+                    f"node {node}: the evidence also fits {len(rivals)} other place(s): "
+                    + "; ".join(
+                        ", ".join(f"{x}={c}" for x, (c, _) in sorted(pl.items()))
+                        for pl in rivals
+                    )
+                )
+            tested = [h for h in self.hyps.live if h.tested]
         if node in self.hyps.fragment and separating_port(self.map, self.hyps, node) is not None:
             return {}
         if len(tested) == 1:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import enum
 import math
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -63,6 +64,7 @@ class TracerParams:
     left_meet_m: float = 0.35  # ... and one this close is the meet point just left: no homing
     left_meet_travel_m: float = 2.0  # ... unless the robot has travelled this far since
     approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
+    approach_look_m: float = 0.5  # the arrival direction: from where the robot was this far back
     backoff_m: float = 0.25  # reverse this far from a contact before re-accessing ...
     backoff_mps: float = 0.1  # ... at this speed, for at most four times as long as it takes
 
@@ -130,6 +132,10 @@ class _State:
     # Homing also wanders (a noisy third echo pulls the circumcentre about), so the edge's
     # length is the encoder distance to where homing began plus the straight step from there.
     approach: tuple[float, float, float, float, float] | None = None  # x, y, tangent, distance
+    # Where the robot was while tracing (encoder distance, x, y; odometry frame), a metre's
+    # worth: the way it really came in. Close to a junction the trace law's tangent can swing
+    # onto another of its edges a moment before homing starts.
+    trail: deque[tuple[float, float, float]] = field(default_factory=lambda: deque(maxlen=64))
     last_seen: float = 0.0
     last_twist: Twist = field(default_factory=Twist)
     # Which way the base last translated: a contact that stops the robot zeroes the command,
@@ -246,7 +252,7 @@ class Tracer:
         if s.armed and self._meet_near(obs, odo):
             s.behaviour = Behaviour.HOME
             if s.tangent is not None and self._approach(odo) is None:
-                s.approach = (odo.x_m, odo.y_m, *s.tangent, odo.distance_m)
+                s.approach = (odo.x_m, odo.y_m, *self._came_along(odo, s.tangent), odo.distance_m)
             return self._home(obs, odo, now, events)
         prev = _to_robot(s.tangent, odo) if s.tangent else None
         out = laws.trace_velocity(obs[0], obs[1], prev, p.alpha_mps, p.beta_per_s)
@@ -254,6 +260,8 @@ class Tracer:
             return s.last_twist
         v, t = out
         s.tangent = _to_odom(t, odo)
+        if not s.trail or odo.distance_m - s.trail[-1][0] >= 0.02:
+            s.trail.append((odo.distance_m, odo.x_m, odo.y_m))
         return v
 
     def _meet_near(self, obs: list[Obstacle], odo: Odometry) -> bool:
@@ -382,6 +390,20 @@ class Tracer:
         s.node_kind = kind
         return length
 
+    def _came_along(self, odo: Odometry, tangent: tuple[float, float]) -> tuple[float, float]:
+        """The direction the robot came in along: from where it traced ``approach_look_m``
+        of travel ago (dead reckoning is good over that), else the trace law's tangent."""
+        s, p = self.s, self.p
+        back = [q for q in s.trail if q[0] <= odo.distance_m - p.approach_look_m]
+        if not back or odo.distance_m - back[-1][0] > 2.0 * p.approach_look_m:
+            return tangent  # a detour or a fresh start since: no straight stretch behind
+        _, x, y = back[-1]
+        dx, dy = odo.x_m - x, odo.y_m - y
+        n = math.hypot(dx, dy)
+        if n < 0.5 * p.approach_look_m:
+            return tangent
+        return dx / n, dy / n
+
     def _approach(self, odo: Odometry) -> tuple[float, float, float, float, float] | None:
         """Where homing onto this meet point began, if it began close enough to count."""
         a = self.s.approach
@@ -399,6 +421,7 @@ class Tracer:
         s.behaviour = Behaviour.DEPART
         s.depart_dir = direction
         s.depart_from = (odo.x_m, odo.y_m)
+        s.trail.clear()  # a new edge: the way in is measured along it alone
         s.tangent = (math.cos(direction), math.sin(direction))
         s.armed = False
         s.depart_m = self.p.depart_m if distance is None else distance

@@ -1,0 +1,50 @@
+"""Matching a meet point's departures to a map node's ports (tslam.core.portmap)."""
+
+from __future__ import annotations
+
+import math
+
+from tslam.core.portmap import PortMap, match_by_angle
+
+R = math.radians
+
+
+def test_a_rotation_maps_ports_to_departures_and_back():
+    pm = PortMap.rotation(1, 3, arrival_index=2)
+    assert pm.arrival == 0  # departure 2 is port (2 + 1) % 3
+    assert [pm.index[p] for p in range(3)] == [2, 0, 1]
+
+
+def test_a_merge_shift_renumbers_the_ports_not_the_departures():
+    pm = PortMap.rotation(0, 4, arrival_index=1).renamed(2)
+    assert pm.arrival == 3
+    assert pm.index[3] == 1 and pm.index[2] == 0
+
+
+def test_a_later_reading_shifted_by_one_departure_keeps_the_ports():
+    pm = PortMap.rotation(0, 3, arrival_index=0).shifted_events(1, 3)
+    assert pm.index == (2, 0, 1)
+
+
+def test_a_three_way_reading_of_a_four_way_node_matches_by_angle_from_the_arrival():
+    ports = [R(a) for a in (10, 100, 190, 280)]  # mapped, arrival by port 1
+    seen = [R(a) for a in (50, 140, 275)]  # arrival at 140: port 1 (100) is 40 degrees off
+    # turned by +40 degrees; 190 and 280 show as one edge between them (235 + 40 = 275)
+    pm = match_by_angle(seen, 1, ports, 1, R(25))
+    assert pm is not None and pm.arrival == 1
+    assert pm.index[1] == 1
+    assert pm.index[0] == 0  # 10 + 40 = 50
+    # The merged pair both lead along the departure between them.
+    assert pm.index[2] == pm.index[3] == 2
+
+
+def test_readings_that_agree_on_nothing_but_the_arrival_do_not_match():
+    ports = [R(a) for a in (0, 70, 180, 290)]
+    seen = [R(a) for a in (0, 120, 240)]
+    assert match_by_angle(seen, 0, ports, 0, R(25)) is None
+
+
+def test_two_edges_more_or_fewer_is_another_place():
+    ports = [R(a) for a in (0, 72, 144, 216, 288)]
+    seen = [R(a) for a in (0, 120, 240)]
+    assert match_by_angle(seen, 0, ports, 0, R(25)) is None

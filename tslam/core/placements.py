@@ -1,0 +1,190 @@
+"""Does the evidence for a localization hypothesis single out one place in the map?
+
+A hypothesis says which old node each node of the fragment is; its confirmed predictions
+are the fragment's edges that matched the map's, port for port and length for length. The
+paper merges when one candidate remains. But a candidate set only holds what the robot
+thought to test: a look-alike it never listed (its arrival edge was already explored, or the
+signature was misread once) is not refuted, merely absent. So before a merge the fragment's
+tested part, its nodes and the edges between them, is placed on the map afresh, everywhere
+it fits: every other placement is a hypothesis the evidence does not exclude. In a building
+whose wings mirror each other (fig15) that is the rule, and the ambiguity is then recorded
+rather than guessed at.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from tslam.core.localize import Hypothesis, Tolerances
+from tslam.core.signature import rotations
+from tslam.core.topomap import TopoMap
+
+Placement = dict[int, tuple[int, int]]  # fragment node -> (old node, rotation)
+
+
+def other_placements(
+    tmap: TopoMap,
+    h: Hypothesis,
+    tol: Tolerances,
+    limit: int = 4,
+    budget: int = 20000,
+) -> tuple[list[Placement], bool] | None:
+    """Up to ``limit`` placements of ``h``'s fragment nodes other than ``h``'s own that fit
+    the map as well, and whether ``h``'s own fits (an edge measured with a detour matched
+    only as a lower bound, which is no proof); None if the search ran out of ``budget``
+    steps.
+    """
+    nodes = [x for x in h.mapping if tmap.has_node(x)]
+    own = {x: h.mapping[x] for x in nodes}
+    found = placements(tmap, nodes, None, tol, limit + 1, budget)
+    if found is None:
+        return None
+    others = [p for p in found if p != own]
+    return others[:limit], len(others) < len(found)
+
+
+def placements(
+    tmap: TopoMap,
+    nodes: list[int],
+    onto: set[int] | None,
+    tol: Tolerances,
+    limit: int,
+    budget: int = 20000,
+) -> list[Placement] | None:
+    """Up to ``limit`` placements of ``nodes`` and the edges between them on the map's
+    other nodes (only on ``onto`` if given); None if the search ran out of ``budget``."""
+    links = _links(tmap, nodes)
+    order = _order(nodes, links)
+    found: list[Placement] = []
+    try:
+        for placement in _place(tmap, order, links, set(nodes), onto, tol, {}, [budget]):
+            found.append(placement)
+            if len(found) >= limit:
+                break
+    except _BudgetError:
+        return None
+    return found
+
+
+class _BudgetError(Exception):
+    """The search for placements ran out of steps."""
+
+
+def _links(tmap: TopoMap, nodes: list[int]) -> dict[int, list[tuple[int, int, int, float]]]:
+    """Per node: (its port, the other node, that node's port, the edge's length) for the
+    edges between the given nodes."""
+    inside = set(nodes)
+    out: dict[int, list[tuple[int, int, int, float]]] = {x: [] for x in nodes}
+    for x in nodes:
+        for p, e in enumerate(tmap.node(x).ports):
+            if e is None:
+                continue
+            edge = tmap.edge(e)
+            y, q = edge.other_end(x, p)
+            if y in inside:
+                out[x].append((p, y, q, edge.length_m))
+    return out
+
+
+def _order(nodes: list[int], links: dict[int, list[tuple[int, int, int, float]]]) -> list[int]:
+    """Nodes in breadth-first order, so that each after a component's first is reached by
+    an edge from one placed before it."""
+    seen: list[int] = []
+    for root in sorted(nodes):
+        if root in seen:
+            continue
+        queue = [root]
+        seen.append(root)
+        while queue:
+            x = queue.pop(0)
+            for _, y, _, _ in links[x]:
+                if y not in seen:
+                    seen.append(y)
+                    queue.append(y)
+    return seen
+
+
+def _place(
+    tmap: TopoMap,
+    order: list[int],
+    links: dict[int, list[tuple[int, int, int, float]]],
+    placed: set[int],
+    onto: set[int] | None,
+    tol: Tolerances,
+    done: Placement,
+    budget: list[int],
+) -> Iterator[Placement]:
+    if len(done) == len(order):
+        yield dict(done)
+        return
+    x = order[len(done)]
+    used = {c for c, _ in done.values()}
+    for c, k in _options(tmap, x, links, placed, tol, done):
+        budget[0] -= 1
+        if budget[0] < 0:
+            raise _BudgetError
+        if c in used or c in placed or (onto is not None and c not in onto):
+            continue
+        if not _edges_fit(tmap, x, c, k, links, tol, done):
+            continue
+        done[x] = (c, k)
+        yield from _place(tmap, order, links, placed, onto, tol, done, budget)
+        del done[x]
+
+
+def _options(
+    tmap: TopoMap,
+    x: int,
+    links: dict[int, list[tuple[int, int, int, float]]],
+    placed: set[int],
+    tol: Tolerances,
+    done: Placement,
+) -> Iterator[tuple[int, int]]:
+    """Where ``x`` could go: led by an edge from a placed neighbour, else anywhere it looks
+    alike."""
+    sig = tmap.signature(x)
+    for p, y, q, _ in links[x]:
+        if y not in done:
+            continue
+        cy, ky = done[y]
+        e = tmap.node(cy).ports[(q + ky) % tmap.node(cy).degree]
+        if e is None:
+            return
+        c, r = tmap.edge(e).other_end(cy, (q + ky) % tmap.node(cy).degree)
+        k = (r - p) % tmap.node(c).degree
+        if k in rotations(sig, tmap.signature(c), tol.clearance_m, tol.angle_rad):
+            yield c, k
+        return
+    for other in tmap.nodes():
+        if other.id in placed:
+            continue
+        for k in rotations(sig, tmap.signature(other.id), tol.clearance_m, tol.angle_rad):
+            yield other.id, k
+
+
+def _edges_fit(
+    tmap: TopoMap,
+    x: int,
+    c: int,
+    k: int,
+    links: dict[int, list[tuple[int, int, int, float]]],
+    tol: Tolerances,
+    done: Placement,
+) -> bool:
+    """Every edge from ``x`` to a placed node is an edge of the map, port for port, of a
+    length within tolerance."""
+    deg = tmap.node(c).degree
+    for p, y, q, length in links[x]:
+        if y not in done and y != x:
+            continue
+        cy, ky = done[y] if y != x else (c, k)
+        e = tmap.node(c).ports[(p + k) % deg]
+        if e is None:
+            return False
+        edge = tmap.edge(e)
+        w, r = edge.other_end(c, (p + k) % deg)
+        if w != cy or r != (q + ky) % tmap.node(cy).degree:
+            return False
+        if not tol.length_ok(length, edge.length_m):
+            return False
+    return True

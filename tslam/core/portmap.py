@@ -1,0 +1,81 @@
+"""Which departure of a meet-point event is which port of a map node.
+
+Usually a rotation: the signature matched under a cyclic shift (``signature.rotations``).
+But a junction is not always read with the same number of edges: two meet points closer
+than the robot is wide are one junction on one visit and a meet point plus a short edge on
+another, and a weak meet point shows on one pass and not on the next (section VII-B). When
+the robot has just followed a known edge to its end, the edge already says where it is, and
+the departures are matched to the node's ports by their angles from the arrival edge.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+TAU = 2.0 * math.pi
+
+
+@dataclass(frozen=True)
+class PortMap:
+    """``index[p]`` is the event's departure for port ``p``; ``arrival`` the port the robot
+    came in by (None if it does not know). After an angle match two ports may share the
+    departure that leads between them."""
+
+    index: tuple[int, ...]
+    arrival: int | None
+
+    @classmethod
+    def rotation(cls, k: int, degree: int, arrival_index: int | None) -> PortMap:
+        """Event departure ``i`` is port ``(i + k) % degree``."""
+        arrival = None if arrival_index is None else (arrival_index + k) % degree
+        return cls(tuple((p - k) % degree for p in range(degree)), arrival)
+
+    def renamed(self, shift: int) -> PortMap:
+        """The same departures after a merge made port ``p`` port ``(p + shift)``."""
+        n = len(self.index)
+        index = [0] * n
+        for p, i in enumerate(self.index):
+            index[(p + shift) % n] = i
+        return PortMap(tuple(index), None if self.arrival is None else (self.arrival + shift) % n)
+
+    def shifted_events(self, shift: int, degree: int) -> PortMap:
+        """The same ports for a later event of the same junction whose departure ``i`` is
+        departure ``(i + shift)`` of this one."""
+        return PortMap(tuple((i - shift) % degree for i in self.index), self.arrival)
+
+
+def match_by_angle(
+    seen_rad: Sequence[float],
+    arrival_index: int,
+    ports_rad: Sequence[float],
+    arrival_port: int,
+    angle_tol_rad: float,
+) -> PortMap | None:
+    """Match the departures seen to a node's ports by their angles from the arrival edge,
+    for a reading with one departure more or fewer; None if too few of them agree (at least
+    all but two of the smaller side's, and one besides the arrival)."""
+    ns, nm = len(seen_rad), len(ports_rad)
+    if abs(ns - nm) != 1:
+        return None
+    rel_seen = [(seen_rad[i] - seen_rad[arrival_index]) % TAU for i in range(ns)]
+    index = []
+    agree = 0
+    for p in range(nm):
+        if p == arrival_port:
+            index.append(arrival_index)
+            continue
+        rel = (ports_rad[p] - ports_rad[arrival_port]) % TAU
+        i = min(
+            (i for i in range(ns) if i != arrival_index), key=lambda i: _angdiff(rel_seen[i], rel)
+        )
+        index.append(i)
+        agree += _angdiff(rel_seen[i], rel) <= angle_tol_rad
+    if agree < max(1, min(ns, nm) - 2):
+        return None
+    return PortMap(tuple(index), arrival_port)
+
+
+def _angdiff(a: float, b: float) -> float:
+    return abs((a - b + math.pi) % TAU - math.pi)
