@@ -36,7 +36,7 @@ def other_placements(
     """
     nodes = [x for x in h.mapping if tmap.has_node(x)]
     own = {x: h.mapping[x] for x in nodes}
-    found = placements(tmap, nodes, None, tol, limit + 1, budget)
+    found = placements(tmap, nodes, tol, limit + 1, budget)
     if found is None:
         return None
     others = [p for p in found if p != own]
@@ -46,18 +46,17 @@ def other_placements(
 def placements(
     tmap: TopoMap,
     nodes: list[int],
-    onto: set[int] | None,
     tol: Tolerances,
     limit: int,
     budget: int = 20000,
 ) -> list[Placement] | None:
     """Up to ``limit`` placements of ``nodes`` and the edges between them on the map's
-    other nodes (only on ``onto`` if given); None if the search ran out of ``budget``."""
+    other nodes; None if the search ran out of ``budget`` steps."""
     links = _links(tmap, nodes)
     order = _order(nodes, links)
     found: list[Placement] = []
     try:
-        for placement in _place(tmap, order, links, set(nodes), onto, tol, {}, [budget]):
+        for placement in _place(tmap, order, links, set(nodes), tol, {}, [budget]):
             found.append(placement)
             if len(found) >= limit:
                 break
@@ -109,7 +108,6 @@ def _place(
     order: list[int],
     links: dict[int, list[tuple[int, int, int, float]]],
     placed: set[int],
-    onto: set[int] | None,
     tol: Tolerances,
     done: Placement,
     budget: list[int],
@@ -123,12 +121,12 @@ def _place(
         budget[0] -= 1
         if budget[0] < 0:
             raise _BudgetError
-        if c in used or c in placed or (onto is not None and c not in onto):
+        if c in used or c in placed:
             continue
         if not _edges_fit(tmap, x, c, k, links, tol, done):
             continue
         done[x] = (c, k)
-        yield from _place(tmap, order, links, placed, onto, tol, done, budget)
+        yield from _place(tmap, order, links, placed, tol, done, budget)
         del done[x]
 
 
