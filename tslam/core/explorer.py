@@ -402,8 +402,8 @@ class Explorer:
     ) -> PortMap | None:
         """The port map if the meet point at the end of a known edge is its node read with
         one edge more or fewer (section VII-B's close meet points, a weak meet point): the
-        edge's length and the clearance agree, and so do the angles of all but the edge
-        that differs."""
+        edge's length agrees (only as a lower bound after a detour), so does the clearance,
+        and so do the angles of all but the edge that differs."""
         tol, wn = self._tol(), self.map.node(w)
         if (
             ev.arrival_index is None
