@@ -496,12 +496,11 @@ class Explorer:
     # ------------------------------------------------------------------ boundary points
     def _on_boundary(self, ev: BoundaryReached) -> None:
         length = self._edge_length(ev.edge_length_m)
-        self.partial_m = 0.0
         tol = self._tol()
         if self.leaving is None or self.detoured:
             self._abandon_hypotheses()
             b = self._add_boundary(ev)
-            self.leaving, self.detoured, self.disturbed = (b, 0), False, False
+            self._leave(b, 0)
             return
         f, j = self.leaving
         e = self.map.node(f).ports[j]
@@ -511,13 +510,13 @@ class Explorer:
             if self.map.node(w).kind == "boundary" and tol.length_ok(length, edge.length_m):
                 if length is not None and not self.disturbed:
                     self.map.add_measurement(e, length)
-                self.leaving, self.disturbed = (w, q), False
+                self._leave(w, q)
                 return
             self._abandon_hypotheses()
             self.plan = []
             b = self._add_boundary(ev)
             self._note(f"expected node {w} after edge {e}, found a boundary: node {b}")
-            self.leaving, self.detoured, self.disturbed = (b, 0), False, False
+            self._leave(b, 0)
             return
         survivors = []
         confirmed = []
@@ -539,7 +538,7 @@ class Explorer:
             self.hyps.fragment.add(b)
         else:
             self.hyps.clear()
-        self.leaving, self.disturbed = (b, 0), False
+        self._leave(b, 0)
 
     def _age(self, hyps: list[Hypothesis], spoke: set[int]) -> list[Hypothesis]:
         out = []

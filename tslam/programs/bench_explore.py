@@ -403,13 +403,20 @@ _RUN_COLUMNS: list[Column] = [
     ("RT factor", lambda r: _fmt(r["realtime_factor"], ".1f"), False),
 ]
 
-_TSLAM_SUMMARY_COLUMNS: list[Column] = [
+_GROUP_COLUMNS: list[Column] = [
     ("drift", lambda s: s["drift"], True),
     ("runs", lambda s: str(s["runs"]), False),
     ("errors", lambda s: str(s["errors"]), False),
-    ("complete", lambda s: f"{s['complete']}/{s['runs']}", False),
+]
+_FM_COLUMNS: list[Column] = [
     ("FM", lambda s: str(s["false_merges"]), False),
     ("runs with FM", lambda s: str(s["runs_with_false_merges"]), False),
+]
+
+_TSLAM_SUMMARY_COLUMNS: list[Column] = [
+    *_GROUP_COLUMNS,
+    ("complete", lambda s: f"{s['complete']}/{s['runs']}", False),
+    *_FM_COLUMNS,
     ("missed closures", lambda s: str(s["missed_closures"]), False),
     ("path/GVG median", lambda s: _fmt(s["path_over_gvg_median"], ".2f"), False),
     ("path/GVG max", lambda s: _fmt(s["path_over_gvg_max"], ".2f"), False),
@@ -418,11 +425,8 @@ _TSLAM_SUMMARY_COLUMNS: list[Column] = [
 ]
 
 _BASELINE_SUMMARY_COLUMNS: list[Column] = [
-    ("drift", lambda s: s["drift"], True),
-    ("runs", lambda s: str(s["runs"]), False),
-    ("errors", lambda s: str(s["errors"]), False),
-    ("FM", lambda s: str(s["false_merges"]), False),
-    ("runs with FM", lambda s: str(s["runs_with_false_merges"]), False),
+    *_GROUP_COLUMNS,
+    *_FM_COLUMNS,
     ("missed revisits", lambda s: str(s["missed_revisits"]), False),
 ]
 
