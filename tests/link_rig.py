@@ -78,6 +78,16 @@ class Child:
             f"stderr: {' | '.join(self.stderr[-10:])}"
         )
 
+    def exit_code(self, timeout_s: float) -> int:
+        """Its exit code once it has exited; a failure naming its last words if it has not."""
+        try:
+            return self.proc.wait(timeout_s)
+        except subprocess.TimeoutExpired:
+            raise AssertionError(
+                f"{self.proc.args} still running after {timeout_s} s; "
+                f"stderr: {' | '.join(self.stderr[-10:])}"
+            ) from None
+
     def signal(self, sig: int) -> None:
         if self.proc.poll() is None:
             self.proc.send_signal(sig)

@@ -108,7 +108,7 @@ def test_monitor_joining_late_gets_the_map_and_commands_are_answered(tmp_path, c
         orders = json.loads((tmp_path / "store" / "daemon_state.json").read_text())
         assert orders["halted"] is None
     d.signal(signal.SIGTERM)
-    assert d.proc.wait(30) == 0
+    assert d.exit_code(30) == 0
 
 
 def test_sigterm_stops_saves_and_tells_systemd(tmp_path, children):
@@ -125,7 +125,7 @@ def test_sigterm_stops_saves_and_tells_systemd(tmp_path, children):
         got = sock.recv(4096).decode()
         assert "READY=1" in got
         d.signal(signal.SIGTERM)
-        assert d.proc.wait(30) == 0
+        assert d.exit_code(30) == 0
         rest = []
         sock.settimeout(1)
         while True:

@@ -13,12 +13,9 @@ from __future__ import annotations
 
 import contextlib
 import math
-import signal
-import threading
 import time
 import uuid
-from collections.abc import Callable, Iterator
-from types import FrameType
+from collections.abc import Callable
 from typing import Any
 
 from hal.errors import HalError
@@ -33,6 +30,8 @@ from tslam.daemon.store import Orders, Store
 from tslam.daemon.systemd import Notifier
 from tslam.daemon.watchdog import Watchdog
 from tslam.link.schemas import Command, CommandReply, EventMsg, RobotState, ScanMsg
+from tslam.stopflag import StopFlag
+from tslam.stopflag import stop_on_signals as on_signals
 
 
 class DaemonError(RuntimeError):
@@ -54,15 +53,15 @@ class Daemon:
         self.inbox = Inbox(answer_within_s=max(2.0, 10.0 / cfg.rate_hz))
         self.orders = Orders()
         self.error: str | None = None
-        self._stop = threading.Event()
+        self._stop = StopFlag()
         self._event_seq = 0
         self._link: Any = None
         self._backend: Any = None
 
     def request_stop(self, why: str) -> None:
-        if not self._stop.is_set():
-            self.say(f"{why}: stopping the robot and saving")
-        self._stop.set()
+        """End the loop at the next cycle; safe from any thread and from a signal handler
+        (the loop, not this, says so)."""
+        self._stop.set(why)
 
     # ------------------------------------------------------------------ run
     def run(self) -> int:
@@ -84,6 +83,7 @@ class Daemon:
             )
         mirror = MapMirror(cfg.robot, self.epoch, explorer)
         with contextlib.ExitStack() as stack:
+            stack.callback(self._stop.close)
             stack.callback(self._shutdown, explorer)
             if cfg.link_enabled:
                 self._link = self._open_link(mirror)
@@ -178,6 +178,8 @@ class Daemon:
             elif next_t < clock.now() - period:
                 next_t = clock.now()  # overran: do not try to catch up with a burst
             clock.sleep(max(0.0, next_t - clock.now()))
+        if self._stop.reason is not None:
+            self.say(f"{self._stop.reason}: stopping the robot and saving")
 
     # ------------------------------------------------------------------ commands
     def _command(self, cmd: Command, explorer: Explorer, backend: Any) -> CommandReply:
@@ -271,16 +273,6 @@ def _scan_msg(robot: str, scan: SonarScan) -> ScanMsg:
     return ScanMsg(robot=robot, stamp_s=stamp, ranges_m=ranges)
 
 
-@contextlib.contextmanager
-def stop_on_signals(daemon: Daemon) -> Iterator[None]:
+def stop_on_signals(daemon: Daemon) -> contextlib.AbstractContextManager[None]:
     """SIGTERM and SIGINT end the loop at the next cycle; the robot stops, the map is saved."""
-
-    def handler(signum: int, frame: FrameType | None) -> None:
-        daemon.request_stop(signal.Signals(signum).name)
-
-    old = {s: signal.signal(s, handler) for s in (signal.SIGTERM, signal.SIGINT)}
-    try:
-        yield
-    finally:
-        for s, h in old.items():
-            signal.signal(s, h)
+    return on_signals(daemon.request_stop)

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import signal
 import sys
 import threading
 import time
@@ -37,6 +36,7 @@ from tslam.link.schemas import (
     RobotState,
     ScanMsg,
 )
+from tslam.stopflag import StopFlag, stop_on_signals
 
 ROW = 30
 
@@ -108,7 +108,7 @@ class DemoRobot:
         self.commands = 0
         self.burst_left = 0
         self.event_seq = 0
-        self.stop = threading.Event()
+        self.stop = StopFlag()
         self.link = RobotLink(
             args.robot, cfg, args.epoch, snapshot=self.map.snapshot, on_command=self.on_command
         )
@@ -237,13 +237,13 @@ def main(argv: list[str] | None = None) -> int:
     except LinkError as e:
         print(f"demo_robot: {e}", file=sys.stderr)
         return 2
-    for sig in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(sig, lambda *_: robot.stop.set())
     print(f"ready {args.epoch}", flush=True)
     try:
-        robot.run()
+        with stop_on_signals(robot.stop.set):
+            robot.run()
     finally:
         robot.link.close()
+        robot.stop.close()
     return 0
 
 

@@ -11,13 +11,12 @@ listening; SIGTERM or SIGINT closes it and exits 0. A bad option or file: one li
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
-import threading
 
 from tslam.link.config import LinkConfig
 from tslam.link.errors import LinkError
 from tslam.link.session import close_session, open_session
+from tslam.stopflag import StopFlag, stop_on_signals
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -41,15 +40,14 @@ def main(argv: list[str] | None = None) -> int:
     except LinkError as e:
         print(f"router: {e}", file=sys.stderr)
         return 2
-    stop = threading.Event()
-    for sig in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(sig, lambda *_: stop.set())
-    print("ready", flush=True)
+    stop = StopFlag()
     try:
-        while not stop.wait(0.5):
-            pass
+        with stop_on_signals(stop.set):
+            print("ready", flush=True)
+            stop.wait(None)
     finally:
         close_session(session, cfg.open_timeout_s + 1.0)
+        stop.close()
     return 0
 
 
