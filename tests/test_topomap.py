@@ -130,6 +130,46 @@ def test_the_estimate_is_the_median_of_the_measurements():
     assert m.graph.edges[a, b, e]["length_m"] == 2.2
 
 
+def test_split_edge_puts_a_missed_junction_on_the_edge():
+    m = TopoMap()
+    w = m.add_meet(1.0, [0.0, 2.0, 4.0], pose=(4, 0))
+    b = m.add_boundary(0.4, pose=(-0.5, -0.5))
+    e = m.connect(w, 1, b, 0, 4.7)
+    m.add_measurement(e, 4.9)
+    j = m.add_meet(0.9, [0.5, 2.5, 4.5], pose=(0, 0))
+    near, far = m.split_edge(e, b, 0, j, 2, 0, 0.7)
+    with pytest.raises(MapError):
+        m.edge(e)
+    assert m.edge(near).lengths_m == (0.7,) and m.edge(far).length_m == pytest.approx(4.1)
+    assert m.node(b).ports == (near,) and m.node(j).ports == (far, None, near)
+    assert m.node(w).ports[1] == far
+    assert [lk.node for lk in m.neighbours(j)] == [w, b]
+    assert nx.has_path(m.graph, b, w) and not m.graph.has_edge(b, w)
+    assert m.changes[-1].op == "edge_split" and m.changes[-1].data["edge"] == e
+    json.dumps(m.changes[-1].data)
+    assert m.unexplored() == [(w, 0), (w, 2), (j, 1)]
+
+
+@pytest.mark.parametrize(
+    "ports, at, why",
+    [
+        ((2, 2), 0.7, "cannot split"),
+        ((2, 3), 0.7, "no port 3"),
+        ((2, 0), 4.8, "cannot split it at"),
+    ],
+)
+def test_split_edge_refuses_what_cannot_be(ports, at, why):
+    m = TopoMap()
+    w = m.add_meet(1.0, [0.0, 2.0, 4.0], pose=(4, 0))
+    b = m.add_boundary(0.4, pose=(-0.5, -0.5))
+    e = m.connect(w, 1, b, 0, 4.7)
+    j = m.add_meet(0.9, [0.5, 2.5, 4.5], pose=(0, 0))
+    before = m.version
+    with pytest.raises(MapError, match=why):
+        m.split_edge(e, b, 0, j, *ports, at)
+    assert m.version == before and m.edge(e).length_m == 4.7
+
+
 def test_remove_node_frees_the_far_ports():
     m = TopoMap()
     nodes = first_lap(m)

@@ -34,6 +34,7 @@ import networkx as nx
 
 from hal.interfaces import DriveLimits
 from hal.types import DriveStatus, Odometry, SonarScan, Twist
+from tslam.core.edgepaths import EdgePaths
 from tslam.core.localize import (
     Hypotheses,
     Hypothesis,
@@ -87,6 +88,16 @@ class ExplorerParams:
     # robot has gone where it cannot be tested, and "a new place" explains as much. This is
     # the paper's candidate sets, each holding only what adjoins the previous set.
     silent_life: int = 2
+    # A meet point found partway along a known edge its first tracing passed without homing
+    # (the third obstacle silent just then, as at a room's corner): placed on that pass by
+    # dead reckoning, trusted only while the robot has travelled this little since ...
+    split_recent_m: float = 20.0
+    split_off_m: float = 0.6  # ... and the pass went this close by the meet point;
+    split_slack_m: float = 1.0  # ... at about the place the edge's length says;
+    split_rest_m: float = 0.5  # ... with this much of the pass still to go;
+    split_look_m: float = 0.8  # the pass this far on shows which departure leads on,
+    split_angle_rad: float = math.radians(35.0)  # ... within this angle
+    split_margin_rad: float = math.radians(20.0)  # ... and clearly closer than any other
 
 
 @dataclass(frozen=True)
@@ -140,6 +151,7 @@ class Explorer:
         self._last_visit: tuple[int, tuple[float, ...], PortMap, float, float] | None = None
         self._now = 0.0
         self._odo: Odometry | None = None
+        self.paths = EdgePaths()
 
     @property
     def mode(self) -> Mode:
@@ -162,6 +174,8 @@ class Explorer:
             return Twist(), []
         twist, events = self.tracer.step(scan, odo, status, now_s)
         self._watch_detour(odo)
+        if self.leaving is not None:
+            self.paths.add(odo)
         for ev in events:
             if isinstance(ev, BoundaryReached):
                 self._on_boundary(ev)
@@ -269,6 +283,12 @@ class Explorer:
 
     def _leave(self, node: int, port: int) -> None:
         """Start on a new edge: whatever the last one left behind does not carry over."""
+        # A pass with a brief excursion is still where the robot went, to a few decimetres.
+        done = self._edge_left()
+        if done is not None and not self.detoured and self._odo is not None:
+            self.paths.finish(done, self.leaving[0], self._odo.distance_m)  # type: ignore[index]
+        else:
+            self.paths.restart()
         self.leaving = (node, port)
         self.detoured = self.disturbed = False
         self._detour_from = None
@@ -375,6 +395,11 @@ class Explorer:
             self.partial_m = length
             self._note(f"weak meet point passed on edge {e} ({f}-{w})")
             return f, 0
+        if short and not self.disturbed:
+            assert length is not None
+            split = self._missed_junction(ev, f, j, e, length)
+            if split is not None:
+                return split
         # Homed past a weak meet point: one edge further than planned (section V-B).
         found = []
         for p, e2 in enumerate(self.map.node(w).ports):
@@ -396,6 +421,84 @@ class Explorer:
             f"{ev.clearance_m:.2f} m after {length or 0:.2f} m"
         )
         return self._lost(ev, why)
+
+    def _missed_junction(
+        self, ev: MeetPointReached, f: int, j: int, e: int, length: float
+    ) -> tuple[int, int] | None:
+        """A junction partway along known edge ``e`` that its first tracing went by without
+        homing: it goes into the map on the edge, which is split there, if the recorded pass
+        shows which of its departures leads on to the edge's far end."""
+        far = self._far_departure(ev, f, e, length)
+        if far is None:
+            return None
+        a = ev.arrival_index
+        assert a is not None
+        w = self.map.edge(e).other_end(f, j)[0]
+        node = self._add_meet(ev)
+        near_e, far_e = self.map.split_edge(e, f, j, node, a, far, length)
+        self._note(
+            f"node {node} found {length:.2f} m along edge {e} ({f}-{w}), a junction its first "
+            f"tracing went by: split into edges {near_e} and {far_e}"
+        )
+        # A hypothesis that placed both ends placed the edge as one, which it is not.
+        kept = [h for h in self.hyps.live if not (f in h.mapping and w in h.mapping)]
+        dropped = len(self.hyps.live) - len(kept)
+        self.hyps.live = kept
+        # It may be a junction already mapped from another side; both its known ports must
+        # then be unexplored there.
+        deg = ev.degree
+        fresh = [
+            (c, k)
+            for c, k in candidates(
+                self.map, self.map.signature(node), self._tol(), self.hyps.fragment | {node}, a
+            )
+            if self.map.node(c).ports[(far + k) % deg] is None
+        ]
+        for c, k in fresh:
+            self.hyps.live.append(Hypothesis({node: (c, k)}))
+        if self.hyps.live:
+            self.hyps.fragment.add(node)
+        else:
+            self.hyps.clear()
+        if fresh or dropped:
+            self._note(
+                f"node {node}: {len(fresh)} look-alike(s), {dropped} hypothesis(es) dropped, "
+                f"{len(self.hyps.live)} open"
+            )
+        self.partial_m = 0.0
+        return node, 0
+
+    def _far_departure(
+        self, ev: MeetPointReached, f: int, e: int, length: float
+    ) -> int | None:
+        """Which departure of the meet point ``ev``, found ``length`` metres from node ``f``
+        along edge ``e``, leads on along ``e``: from the recorded pass over ``e``."""
+        p, odo, a = self.p, self._odo, ev.arrival_index
+        path = self.paths.get(e)
+        if path is None or odo is None or a is None:
+            return None
+        if odo.distance_m - path.end_distance_m > p.split_recent_m:
+            return None
+        s, off = path.nearest(ev.x_m, ev.y_m)
+        forward = path.start == f
+        expect = length if forward else path.length_m - length
+        if off > p.split_off_m or abs(s - expect) > p.split_slack_m:
+            return None
+        rest = path.length_m - s if forward else s
+        if rest < p.split_rest_m:
+            return None  # as likely the far end itself, read otherwise
+        look = min(p.split_look_m, rest)
+        on = s + look if forward else s - look
+        tx, ty = path.at(on)
+        bearing = math.atan2(ty - ev.y_m, tx - ev.x_m)
+        fits = sorted(
+            (_angdiff(ev.departures_rad[i], bearing), i) for i in range(ev.degree) if i != a
+        )
+        if not fits or fits[0][0] > p.split_angle_rad:
+            return None
+        if len(fits) > 1 and fits[1][0] - fits[0][0] < p.split_margin_rad:
+            return None
+        return fits[0][1]
 
     def _read_otherwise(
         self, ev: MeetPointReached, w: int, q: int, length: float | None, mapped: float
@@ -727,6 +830,13 @@ class Explorer:
         if best == a or _angdiff(ev.departures_rad[best], ahead) > self.p.weak_through_rad:
             return None
         return best
+
+    def _edge_left(self) -> int | None:
+        """The map edge of the departure being traced, once it is known."""
+        if self.leaving is None or not self.map.has_node(self.leaving[0]):
+            return None
+        ports = self.map.node(self.leaving[0]).ports
+        return ports[self.leaving[1]] if self.leaving[1] < len(ports) else None
 
     def _add_meet(self, ev: MeetPointReached) -> int:
         truth = self.truth() if self.truth else None

@@ -116,7 +116,7 @@ class Change:
     """One numbered map change; ``data`` is plain JSON (ids, numbers, node/edge dicts)."""
 
     seq: int
-    op: str  # node_added, edge_added, measurement, merge, ambiguity, node_removed
+    op: str  # node_added, edge_added, measurement, merge, ambiguity, node_removed, edge_split
     data: dict[str, Any]
 
 
@@ -323,6 +323,36 @@ class TopoMap:
         self._put_edge(edge)
         self._record("edge_added", {"edge": edge_to_dict(edge)})
         return edge.id
+
+    def split_edge(
+        self, e: int, node: int, port: int, mid: int, near_port: int, far_port: int, near_m: float
+    ) -> tuple[int, int]:
+        """Edge ``e``, left from ``node`` by ``port``, runs through the meet point ``mid``
+        (one its first tracing passed without homing): it becomes two edges, ``node`` to
+        ``mid``'s ``near_port`` (``near_m`` long, as measured) and ``mid``'s ``far_port`` to
+        the far end (the rest of ``e``'s length). Returns the two new edge ids."""
+        edge = self.edge(e)
+        far, far_q = edge.other_end(node, port)
+        m = self.node(mid)
+        if mid in (node, far) or near_port == far_port:
+            raise MapError(f"node {mid} cannot split edge {e} by ports {near_port}, {far_port}")
+        for p in (near_port, far_port):
+            if isinstance(p, bool) or not isinstance(p, int) or not 0 <= p < m.degree:
+                raise MapError(f"node {mid} has no port {p!r} (degree {m.degree})")
+            if m.ports[p] is not None:
+                raise MapError(f"port {p} of node {mid} is already taken by edge {m.ports[p]}")
+        near = _number(near_m, "near_m", lo=0.0)
+        if near >= edge.length_m:
+            raise MapError(f"edge {e} is {edge.length_m:.2f} m long: cannot split it at {near} m")
+        self._drop_edge(e)
+        a = Edge(self._next_edge, node, port, mid, near_port, (near,))
+        b = Edge(self._next_edge + 1, mid, far_port, far, far_q, (edge.length_m - near,))
+        self._next_edge += 2
+        for x in (a, b):
+            self._put_edge(x)
+        into = [edge_to_dict(a), edge_to_dict(b)]
+        self._record("edge_split", {"edge": e, "node": mid, "into": into})
+        return a.id, b.id
 
     def add_measurement(self, edge: int, length_m: float) -> None:
         """Another encoder length for a retraced edge; the estimate is their median."""
