@@ -88,7 +88,7 @@ def test_heartbeat_loss_mid_exploration_stops_the_robot(monkeypatch, capsys):
     code = cli.main(["sim", "--world", "fig12", "--seed", "1", "--backend", COMPOSED,
                      "--can-stop-heartbeat-after", "20", "--quiet"])  # fmt: skip
     out, err = capsys.readouterr()
-    assert code == 2 and out == ""
+    assert code == 1 and out == ""  # a hardware failure, not a mistake in the command
     lines = err.strip().splitlines()
     assert len(lines) == 1, err
     assert lines[0].startswith("tslam: error: CAN sonar board at 0x400")
@@ -115,7 +115,7 @@ def test_heartbeat_loss_ends_the_process_with_one_line():
          "--backend", COMPOSED, "--can-stop-heartbeat-after", "2", "--quiet"],
         capture_output=True, text=True, timeout=RUN_S,
     )  # fmt: skip
-    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.returncode == 1 and proc.stdout == ""
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "lost" in lines[0], proc.stderr
     assert "Traceback" not in proc.stderr

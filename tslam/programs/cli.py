@@ -1,4 +1,5 @@
-"""The ``tslam`` command line. Every user mistake ends in one line on stderr and exit code 2."""
+"""The ``tslam`` command line. Every user mistake ends in one line on stderr and exit code 2;
+a robot that had to be stopped on a hardware or link failure, in one line and exit code 1."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from hal.errors import HalError
+from hal.errors import ConfigurationError, HalError
 from sim_backend.world import WorldError
 
 
@@ -45,9 +46,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.run(args) or 0)
-    except (UserError, WorldError, HalError) as exc:
+    except (UserError, WorldError, ConfigurationError) as exc:
         print(f"tslam: error: {exc}", file=sys.stderr)
         return 2
+    except HalError as exc:  # not the user's doing: the device or its link failed
+        print(f"tslam: error: {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("tslam: interrupted", file=sys.stderr)
         return 130
