@@ -106,3 +106,39 @@ def test_the_sweep_on_the_robot_finds_four_door_and_wall_obstacles_at_fig14s_jun
         assert len(near) == 4, (heading_deg, world_bearings)
         for got, want in zip(world_bearings, (21.0, 90.0, 231.0, 340.0), strict=True):
             assert abs(got - want) < 8.0, (heading_deg, world_bearings)
+
+
+def _fine_ring() -> np.ndarray:
+    """A ring that fires all its transducers within 100 ms, swept: some 700 readings."""
+    return _ring(0.5)
+
+
+def test_a_fast_rings_side_lobe_streaks_are_not_obstacles():
+    b = _fine_ring()
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 80) & (deg <= 110)] = 1.0
+    # A nearer wall 20-40 degrees off the axes answers the side lobes, half the firings.
+    lobe = (deg >= 130) & (deg <= 150)
+    rng = np.random.default_rng(7)
+    d[lobe] = np.where(rng.random(lobe.sum()) < 0.5, 0.8, np.inf)
+    assert _bearings(sweep_minima(b, d)) == [95]
+    # A slow ring's sweep holds a wall in three samples: still an obstacle.
+    slow = _ring(5.6)
+    ds = np.full(len(slow), np.inf)
+    ds[(np.degrees(slow) >= 190) & (np.degrees(slow) <= 202)] = 1.1
+    assert _bearings(sweep_minima(slow, ds)) == [196]
+
+
+def test_stray_deep_readings_do_not_split_a_bent_wall_on_a_fast_ring():
+    b = _fine_ring()
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 330) & (deg <= 350)] = 1.40
+    d[(deg > 350) | (deg < 10)] = 1.52
+    d[(deg >= 10) & (deg <= 30)] = 1.42
+    d[np.flatnonzero((deg > 355) | (deg < 5))[[2, 9, 15]]] = 5.2  # three outliers
+    assert len(sweep_minima(b, d)) == 1
+    # A view past the bend some degrees wide (a doorway) still makes two.
+    d[(deg > 356) | (deg < 4)] = 3.7
+    assert len(sweep_minima(b, d)) == 2

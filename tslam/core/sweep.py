@@ -35,6 +35,8 @@ from tslam.core.sensing import Obstacle
 #: bearings are good to about 5 degrees each, so it joins up to 60 lest a 45-degree bend
 #: (fig12's cut corner) show as a meet point from some headings.
 BENT_WALL_MERGE_RAD = math.radians(60.0)
+#: The narrowest view past a bend that makes its two faces two obstacles.
+MIN_VIEW_RAD = math.radians(4.0)
 
 
 class Sweep:
@@ -60,6 +62,12 @@ class Sweep:
             self._bearing.append(float(scan.yaw_rad[i]))
             self._dist.append(float(math.hypot(ex[i], ey[i])) if math.isfinite(r[i]) else math.inf)
 
+    @property
+    def firings_per_transducer(self) -> float:
+        """How many times each transducer answered during the sweep (about 4 on a Nomad
+        ring at 60 ms a transducer; dozens on a ring that fires all within 100 ms)."""
+        return len(self._dist) / len(self._last) if self._last is not None else 0.0
+
     def obstacles(self, merge_rad: float = BENT_WALL_MERGE_RAD) -> list[Obstacle]:
             return sweep_minima(np.asarray(self._bearing), np.asarray(self._dist), merge_rad)
 
@@ -72,6 +80,7 @@ def sweep_minima(
     tol_rel: float = 0.03,
     bend_ratio: float = 1.25,
     min_samples: int = 3,
+    min_run_rad: float = math.radians(8.0),
 ) -> list[Obstacle]:
     """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
 
@@ -86,6 +95,9 @@ def sweep_minima(
     b = np.mod(bearing_rad[order], 2 * math.pi)
     d = distance_m[order]
     claimed = np.full(n, -1)
+    # Each reading stands for the sweep's mean spacing: a slow ring's few readings each cover
+    # degrees, a fast ring's many a fraction of one.
+    fewest = max(min_samples, math.ceil(min_run_rad * n / (2 * math.pi)))
     runs: list[tuple[float, float, int, int]] = []  # distance, mid bearing, lo, hi
     for run_id, i in enumerate(np.argsort(d, kind="stable")):
         if not math.isfinite(d[i]):
@@ -113,9 +125,11 @@ def sweep_minima(
             lo -= 1
         idx = np.array([k % n for k in range(lo, hi + 1)])
         claimed[idx] = run_id
-        if slope or len(idx) == n or len(idx) < min_samples:
-            # A real wall or corner answers over the whole beam, several samples of a sweep;
-            # a run of one or two is a side lobe's or a multipath's stray echo.
+        if slope or len(idx) == n or len(idx) < fewest:
+            # A real wall or corner answers over the whole beam: several samples of a sweep,
+            # over some 25 degrees of axis. A run of one or two is a stray echo, and so is a
+            # side lobe's run on a ring that fires fast: it answers half its firings at
+            # random, so its runs hold several samples, but only a few degrees' worth.
             continue
         # The middle of the plateau: the mean of its end bearings, unwrapped across 0.
         first, last = b[idx[0]], b[idx[-1]]
@@ -135,7 +149,8 @@ def sweep_minima(
             k = parent[k]
         return k
 
-    for k in range(m if m > 2 else m - 1):
+    # Every neighbouring pair, counter-clockwise: with two runs that is both arcs between them.
+    for k in range(m if m > 1 else 0):
         a, c = runs[k], runs[(k + 1) % m]
         if _one_wall(a, c, d, merge_rad, bend_ratio):
             parent[root((k + 1) % m)] = root(k)
@@ -166,8 +181,14 @@ def _one_wall(
     n = len(d)
     k, end = (a[3] + 1) % n, c[2]
     limit = bend_ratio * max(a[0], c[0])
+    # A view past the bend is some degrees wide; one stray reading is not (a ring that fires
+    # fast sweeps hundreds of readings, and outliers among them). Each reading stands for
+    # the sweep's mean spacing, so on a slow ring one deeper reading still separates.
+    deep = 0
     while k != end:
         if math.isfinite(d[k]) and d[k] > limit:
-            return False
+            deep += 1
+            if deep * 2 * math.pi / n >= MIN_VIEW_RAD:
+                return False
         k = (k + 1) % n
     return True

@@ -61,6 +61,8 @@ class TracerParams:
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
+    rejected_meet_m: float = 0.5  # ... or this far, from one the sweep rejected ...
+    fast_ring_firings: float = 8.0  # ... on a ring whose transducers each fired this often
     left_meet_m: float = 0.35  # ... and one this close is the meet point just left: no homing
     left_meet_travel_m: float = 2.0  # ... unless the robot has travelled this far since
     approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
@@ -125,6 +127,11 @@ class _State:
     node_distance: float | None = None  # encoder distance at the last node
     node_kind: str = ""
     last_meet: tuple[float, float] | None = None  # odometry frame
+    # The last sweep found no meet point there, on a ring that fires fast. Where three
+    # obstacles stay nearly equidistant along the edge (a bent wall's two faces and the far
+    # side, as at fig12's cut corner), such a ring proposes one close by afresh every cycle,
+    # and the robot would sweep there for minutes: the next try must be clear of it.
+    rejected: bool = False
     left_meet: tuple[float, float] | None = None  # the meet point reported last, left by an edge
     # Where homing began and the edge's tangent there: near a junction the two closest
     # obstacles may belong to another of its edges, so the tangent the trace law keeps while
@@ -294,7 +301,7 @@ class Tracer:
         cx, cy = _to_odom(c, odo)
         ahead = cx * s.tangent[0] + cy * s.tangent[1] > 0.0
         moved = math.hypot(odo.x_m + cx - s.last_meet[0], odo.y_m + cy - s.last_meet[1])
-        return ahead and moved >= p.new_meet_m
+        return ahead and moved >= (p.rejected_meet_m if s.rejected else p.new_meet_m)
 
     def _home(
         self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]
@@ -324,6 +331,7 @@ class Tracer:
             return Twist(0.0, 0.0, p.sweep_radps)
         s.settle_tries += 1
         obs = s.sweep.obstacles()
+        fast_ring = s.sweep.firings_per_transducer > p.fast_ring_firings
         s.sweep = None
         swept = laws.circumcentre(*obs[:3]) if len(obs) >= 3 else None
         if swept is not None and math.hypot(*swept) > p.converge_tol_m and s.settle_tries < 3:
@@ -335,6 +343,7 @@ class Tracer:
             s.behaviour = Behaviour.TRACE
             s.armed = False
             s.last_meet = _add(_to_odom(swept, odo), odo) if swept else (odo.x_m, odo.y_m)
+            s.rejected = fast_ring
             return None
         self._meet(obs, odo, now, events)
         return None
@@ -361,6 +370,7 @@ class Tracer:
         )
         events.append(ev)
         s.last_meet = s.left_meet = (odo.x_m, odo.y_m)
+        s.rejected = False
         k = self.choose(ev)
         self._start_depart(deps[k], odo)
 
