@@ -119,10 +119,9 @@ def inprocess() -> tuple[Run, dict[str, Any]]:
 
 COMPOSED_FAILS = pytest.mark.xfail(
     strict=True,
-    reason="the explorer fails with a ring fired the way the CAN board fires it (every "
-    "transducer within one 100 ms update): in process too, with fire_interval_s 0.004 or "
-    "0.00625 (fig12 seeds 1, 3, 6: 31-37 meet nodes); and with the Nomad's 60 ms firing the "
-    "board's arrival stamps make every poll look like a new firing to the sweep",
+    reason="in process the explorer now maps fig12 right with the ring fired the way the "
+    "CAN board fires it (tests/test_fast_ring.py), but through both emulators seed 6 still "
+    "ends incomplete, with duplicate nodes (6 at 900 s); not yet traced",
 )
 
 

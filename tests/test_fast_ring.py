@@ -6,15 +6,19 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from hal.registry import create_backend
 from sim_backend.ground_truth import compute_gvg
 from tslam.core.explorer import Explorer
 
 
-def test_fig12_explored_with_a_ring_fired_like_a_can_board():
+@pytest.mark.parametrize("fire_interval_s", [0.004, 0.00625])
+def test_fig12_explored_with_a_ring_fired_like_a_can_board(fire_interval_s):
     b = create_backend(
-        {"backend": "sim", "world": "fig12", "seed": 6, "drift": "none", "fire_interval_s": 0.00625}
-    )
+        {"backend": "sim", "world": "fig12", "seed": 6, "drift": "none",
+         "fire_interval_s": fire_interval_s}
+    )  # fmt: skip
     robot = b.robot
     ex = Explorer(b.limits, truth=lambda: (robot.true_pose().x, robot.true_pose().y))
     with b:

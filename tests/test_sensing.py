@@ -94,3 +94,25 @@ def test_a_lone_spike_is_held_until_confirmed():
     stamps[5] = 2.0
     obs = sensor.update(_scan(spiky, stamps), Odometry(0.0, 0.0, 0.0, 0.0, 2.0))
     assert obs[0].distance_m == pytest.approx(0.73)  # repeated: it is real
+
+
+def test_a_second_spike_far_below_a_held_one_is_not_its_confirmation():
+    """On a ring that fires fast, two outliers a few firings apart on one transducer happen:
+    the second is another spike, not the first one repeated."""
+    sensor = RingSensor()
+    base = [3.0] * 16
+    sensor.update(_scan(base, np.zeros(16)), Odometry(0.0, 0.0, 0.0, 0.0, 0.0))
+    first = list(base)
+    first[5] = 1.6
+    stamps = np.zeros(16)
+    stamps[5] = 0.1
+    obs = sensor.update(_scan(first, stamps), Odometry(0.0, 0.0, 0.0, 0.0, 0.1))
+    assert min(o.distance_m for o in obs) > 3.0  # held back
+    second = list(base)
+    second[5] = 0.2
+    stamps[5] = 0.2
+    obs = sensor.update(_scan(second, stamps), Odometry(0.0, 0.0, 0.0, 0.0, 0.2))
+    assert min(o.distance_m for o in obs) > 3.0  # held back too
+    stamps[5] = 0.3
+    obs = sensor.update(_scan(second, stamps), Odometry(0.0, 0.0, 0.0, 0.0, 0.3))
+    assert obs[0].distance_m == pytest.approx(0.43)  # repeated: it is real

@@ -163,13 +163,12 @@ class RingSensor:
         assert prev is not None
         below = far + self.p.spike_m
         spike = (
-            fresh
-            & ~self._held
-            & (below < prev)
-            & (below < np.roll(far, 1))
-            & (below < np.roll(far, -1))
+            fresh & (below < prev) & (below < np.roll(far, 1)) & (below < np.roll(far, -1))
         )
-        # A spike is held once; if the transducer repeats it, it is real.
+        # A spike is held once; if the transducer repeats it, it is real: ``prev`` is then the
+        # held spike, which a repeat is not far below. A second spike far below the first is
+        # held in turn (on a ring that fires fast, two outliers on one transducer a few
+        # firings apart do happen, and the second was taken for the first's confirmation).
         self._held = np.where(fresh, spike, self._held)
         self._prev_dist = np.where(fresh, far, prev)
         self._last_stamp = stamps.copy()
