@@ -12,9 +12,7 @@ and link options, optionally prefixed) and ``make_can_sonar_device``.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
-import os
 import signal
 import sys
 from collections.abc import Mapping
@@ -26,6 +24,7 @@ from sim_backend.emulators.can_sonar_faults import BoardFaults
 from sim_backend.emulators.host import EmulatorHost
 from sim_backend.simulator import SimRobot
 from tslam.programs.cli import UserError
+from tslam.stopflag import StopFlag
 
 _RESOLUTIONS_CM = {"1": Resolution.CM_1, "0.5": Resolution.CM_0_5,
                    "0.25": Resolution.CM_0_25, "0.125": Resolution.CM_0_125}  # fmt: skip
@@ -177,20 +176,18 @@ def _run(args: argparse.Namespace) -> int:
 
 
 class _StopOnSignal:
-    """Stops the host on SIGTERM or SIGINT through a self-pipe, so a signal that arrives before
-    the host's loop has started (it marks itself running when it starts) still stops it."""
+    """Stops the host on SIGTERM or SIGINT: the stop flag's pipe is one of the host's devices,
+    so a signal that arrives before the host's loop has started still stops it."""
 
     def __init__(self) -> None:
-        self._r, self._w = os.pipe()
-        os.set_blocking(self._w, False)
+        self.flag = StopFlag()
         self.host: EmulatorHost | None = None
 
     def on_signal(self, signum: int, frame: object) -> None:
-        with contextlib.suppress(OSError):
-            os.write(self._w, b"!")
+        self.flag.set(signal.Signals(signum).name)
 
     def fileno(self) -> int:
-        return self._r
+        return self.flag.fileno()
 
     def service(self, now_s: float) -> None:
         if self.host is not None:
@@ -201,8 +198,4 @@ class _StopOnSignal:
 
     def close(self) -> None:
         # Idempotent: the host closes its devices, and so does the command after it.
-        fds, (self._r, self._w) = (self._r, self._w), (-1, -1)
-        for fd in fds:
-            if fd >= 0:
-                with contextlib.suppress(OSError):
-                    os.close(fd)
+        self.flag.close()
