@@ -109,3 +109,22 @@ def test_fig15_corner_dead_end_is_mapped_through_its_junction():
 
     named = {tuple(sorted((true_name(e.u), true_name(e.v)))) for e in ex.map.edges()}
     assert {("b16", "m0"), ("m0", "m4")} <= named and ("b16", "m4") not in named
+
+
+def test_back_at_the_node_just_left_after_passing_a_weak_meet_point_is_a_bounce():
+    """Passing a weak meet point on a known edge, then homing back onto the node the edge
+    left from: the robot is back at that node (it once crashed here on an assertion)."""
+    ex = Explorer(NOMAD200_LIMITS)
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    assert ex._choose(meet(0.0, 0.0, [0, 120, 240], None, None)) == 0  # A: off east
+    ex._odo = Odometry(4.0, 0.0, 0.0, 0.0, 4.0, 4.0)
+    ex._choose(meet(4.0, 0.0, [180, 300, 60], 180, 4.0))  # B: a new node, edge 1 from A
+    assert [(e.u, e.v) for e in ex.map.edges()] == [(1, 2)]
+    ex.leaving = (2, ex.map.edge(1).port_v)  # sent back to A along edge 1
+    # Halfway, a weak meet point with the way on straight ahead.
+    ex._choose(meet(2.0, 0.0, [0, 90, 180], 0, 2.0))
+    assert ex.partial_m == pytest.approx(2.0) and "weak meet point" in ex.notes[-1].text
+    # The edge is not held: the robot homes back onto B, where it started.
+    ex._choose(meet(4.05, 0.0, [180, 300, 60], 60, 1.0))
+    assert ex.notes[-1].text.startswith("back at node 2")
+    assert ex.partial_m == 0.0 and ex.leaving[0] == 2

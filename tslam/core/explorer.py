@@ -139,6 +139,7 @@ class Explorer:
         self.disturbed = False  # ... or left it and rejoined it: the length is only a bound
         self._detour_from: tuple[float, float, float, bool] | None = None
         self.partial_m = 0.0  # length before a weak meet point passed through
+        self._through: int | None = None  # ... and the departure that goes on through it
         self.plan: list[Step] = []
         self.frozen: set[tuple[int, int]] = set()
         self.done = False
@@ -263,9 +264,8 @@ class Explorer:
     # ------------------------------------------------------------------ meet points
     def _choose(self, ev: MeetPointReached) -> int:
         node, pm = self._arrive(ev)
-        if self.partial_m > 0 and self.leaving is not None and self.leaving[0] == node:
-            through = self._through_port(ev)
-            assert through is not None  # _expected only passes through where there is one
+        through, self._through = self._through, None
+        if through is not None:
             return through  # a weak meet point: carry on along the edge
         renamed = self._resolve(node)
         if node in renamed:
@@ -393,6 +393,7 @@ class Explorer:
             # A weak meet point halfway (section VII-B): it did not show when the edge was
             # first traced. Not a node of the map; the edge goes on straight ahead.
             self.partial_m = length
+            self._through = self._through_port(ev)
             self._note(f"weak meet point passed on edge {e} ({f}-{w})")
             return f, 0
         if short and not self.disturbed:
