@@ -8,11 +8,14 @@ import math
 import numpy as np
 import pytest
 
+from hal.registry import create_backend
 from hal.types import Twist
 from sim_backend.backend import SimBackend
 from sim_backend.builtin_worlds import builtin_world
+from sim_backend.ground_truth import compute_gvg
 from sim_backend.world import PolygonWorld, StartPose
 from tslam.core.sweep import Sweep, sweep_minima
+from tslam.core.tracer import MeetPointReached, Tracer
 
 
 def _ring(step_deg: float = 5.0) -> np.ndarray:
@@ -142,3 +145,41 @@ def test_stray_deep_readings_do_not_split_a_bent_wall_on_a_fast_ring():
     # A view past the bend some degrees wide (a doorway) still makes two.
     d[(deg > 356) | (deg < 4)] = 3.7
     assert len(sweep_minima(b, d)) == 2
+
+
+def test_one_stray_reading_between_the_faces_of_a_bent_wall_does_not_split_it():
+    """fig12's cut corner on a Nomad ring: a single outlier past the bend between the cut
+    face and the side wall made them two obstacles, and with the block opposite, a meet point
+    4.7 m from any true one. A view into a doorway spans degrees and still separates."""
+    b = _ring(5.6)
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 330) & (deg <= 350)] = 1.40
+    d[(deg > 350) | (deg < 10)] = 1.52
+    d[(deg >= 10) & (deg <= 30)] = 1.42
+    d[np.argmin(np.abs(deg - 0.0))] = 5.3  # one outlier at the vertex
+    assert len(sweep_minima(b, d)) == 1
+    d[(deg > 354) | (deg < 6)] = 3.7  # a doorway, two readings wide
+    assert len(sweep_minima(b, d)) == 2
+
+
+def test_the_tracer_finds_no_meet_point_at_fig12s_cut_corner():
+    backend = create_backend({"backend": "sim", "world": "fig12", "seed": 1, "drift": "paper"})
+    true_meets = [(n.x, n.y) for n in compute_gvg(backend.world).nodes if n.kind == "meet"]
+    tracer = Tracer(backend.limits)
+    robot = backend.robot
+    offs: list[float] = []
+    with backend:
+        clock = backend.clock
+        while clock.now() < 900.0 and len(offs) < 12:
+            twist, events = tracer.step(
+                backend.scan(), backend.odometry(), backend.status(), clock.now()
+            )
+            backend.command(twist)
+            for ev in events:
+                if isinstance(ev, MeetPointReached):
+                    tp = robot.true_pose()
+                    offs.append(min(math.dist((tp.x, tp.y), m) for m in true_meets))
+            clock.sleep(0.1)
+    assert len(true_meets) == 3
+    assert len(offs) == 12 and max(offs) < 0.15, offs

@@ -18,8 +18,9 @@ that borders a lower reading is a slope, not an obstacle; no echo separates runs
 Two runs closer than ``merge_rad`` in bearing are one obstacle only where they could be one
 bent wall: every reading between them is no echo (a side lobe or a dropout split the
 plateau) or no deeper than ``bend_ratio`` times their distance (the vertex of a flat
-concave bend). A deeper reading between them, such as a doorway's view into the next room,
-makes them two obstacles at any angle: the ground truth's bent-wall rule, seen by sonar.
+concave bend). A deeper view between them some degrees wide, such as a doorway's into the
+next room, makes them two obstacles at any angle: the ground truth's bent-wall rule, seen by
+sonar. A single deeper reading is an outlier.
 """
 
 from __future__ import annotations
@@ -35,8 +36,9 @@ from tslam.core.sensing import Obstacle
 #: bearings are good to about 5 degrees each, so it joins up to 60 lest a 45-degree bend
 #: (fig12's cut corner) show as a meet point from some headings.
 BENT_WALL_MERGE_RAD = math.radians(60.0)
-#: The narrowest view past a bend that makes its two faces two obstacles.
-MIN_VIEW_RAD = math.radians(4.0)
+#: The narrowest view past a bend that makes its two faces two obstacles: two readings of a
+#: Nomad ring's sweep. One outlier between a cut corner's faces made fig12's a meet point.
+MIN_VIEW_RAD = math.radians(8.0)
 
 
 class Sweep:
@@ -181,9 +183,9 @@ def _one_wall(
     n = len(d)
     k, end = (a[3] + 1) % n, c[2]
     limit = bend_ratio * max(a[0], c[0])
-    # A view past the bend is some degrees wide; one stray reading is not (a ring that fires
-    # fast sweeps hundreds of readings, and outliers among them). Each reading stands for
-    # the sweep's mean spacing, so on a slow ring one deeper reading still separates.
+    # A view past the bend is some degrees wide; one stray reading is not (an outlier, and a
+    # ring that fires fast sweeps hundreds of readings, outliers among them). Each reading
+    # stands for the sweep's mean spacing: two deeper readings separate on a slow ring.
     deep = 0
     while k != end:
         if math.isfinite(d[k]) and d[k] > limit:
