@@ -285,8 +285,8 @@ class Explorer:
         """Start on a new edge: whatever the last one left behind does not carry over."""
         # A pass with a brief excursion is still where the robot went, to a few decimetres.
         done = self._edge_left()
-        if done is not None and not self.detoured and self._odo is not None:
-            self.paths.finish(done, self.leaving[0], self._odo.distance_m)  # type: ignore[index]
+        if done is not None and self.leaving and not self.detoured and self._odo is not None:
+            self.paths.finish(done, self.leaving[0], self._odo.distance_m)
         else:
             self.paths.restart()
         self.leaving = (node, port)
@@ -389,11 +389,12 @@ class Explorer:
             )
             return w, pm
         short = length is not None and length < edge.length_m - tol.length_abs_m
-        if short and self._through_port(ev) is not None:
+        through = self._through_port(ev) if short else None
+        if through is not None:
             # A weak meet point halfway (section VII-B): it did not show when the edge was
             # first traced. Not a node of the map; the edge goes on straight ahead.
             self.partial_m = length
-            self._through = self._through_port(ev)
+            self._through = through
             self._note(f"weak meet point passed on edge {e} ({f}-{w})")
             return f, 0
         if short and not self.disturbed:
