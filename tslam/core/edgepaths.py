@@ -59,13 +59,19 @@ class EdgePaths:
         if not self._live or odo.distance_m - self._live[-1][0] >= self.spacing_m:
             self._live.append((odo.distance_m, odo.x_m, odo.y_m))
 
+    def live(self, start: int, distance_m: float) -> EdgePath | None:
+        """The edge being recorded, so far, traced from node ``start``."""
+        if len(self._live) < 2:
+            return None
+        d0 = self._live[0][0]
+        return EdgePath(start, tuple((d - d0, x, y) for d, x, y in self._live), distance_m)
+
     def finish(self, edge: int, start: int, distance_m: float) -> None:
         """The edge being recorded was ``edge``, traced from node ``start``."""
-        if len(self._live) >= 2:
-            d0 = self._live[0][0]
-            pts = tuple((d - d0, x, y) for d, x, y in self._live)
+        path = self.live(start, distance_m)
+        if path is not None:
             self._done.pop(edge, None)
-            self._done[edge] = EdgePath(start, pts, distance_m)
+            self._done[edge] = path
             while len(self._done) > self.keep:
                 self._done.pop(next(iter(self._done)))
         self._live = []

@@ -34,7 +34,7 @@ import networkx as nx
 
 from hal.interfaces import DriveLimits
 from hal.types import DriveStatus, Odometry, SonarScan, Twist
-from tslam.core.edgepaths import EdgePaths
+from tslam.core.edgepaths import EdgePath, EdgePaths
 from tslam.core.localize import (
     Hypotheses,
     Hypothesis,
@@ -57,6 +57,7 @@ from tslam.core.tracer import (
     Tracer,
     TracerParams,
 )
+from tslam.core.walkon import Walk, WalkParams, walk_back, walk_on
 
 TAU = 2.0 * math.pi
 
@@ -92,12 +93,16 @@ class ExplorerParams:
     # (the third obstacle silent just then, as at a room's corner): placed on that pass by
     # dead reckoning, trusted only while the robot has travelled this little since ...
     split_recent_m: float = 20.0
+    twin_m: float = 0.25  # ... and a meet point this far from where it says is another one
     split_off_m: float = 0.6  # ... and the pass went this close by the meet point;
     split_slack_m: float = 1.0  # ... at about the place the edge's length says;
     split_rest_m: float = 0.5  # ... with this much of the pass still to go;
     split_look_m: float = 0.8  # the pass this far on shows which departure leads on,
     split_angle_rad: float = math.radians(35.0)  # ... within this angle
     split_margin_rad: float = math.radians(20.0)  # ... and clearly closer than any other
+    # Gone through the expected node without homing (a weak meet point): this traversal's
+    # own dead-reckoned path says which way the robot turned there (``tslam.core.walkon``).
+    walk: WalkParams = field(default_factory=WalkParams)
 
 
 @dataclass(frozen=True)
@@ -318,6 +323,9 @@ class Explorer:
         seen = self._seen(ev, a, f)
         if e is not None:
             return self._expected(ev, seen, f, j, e, length)
+        went = self._walked_to(ev, a, length, back=True)
+        if went is not None:
+            return went
         return self._new_edge(ev, seen, f, j, length)
 
     def _bounced(self, ev: MeetPointReached) -> tuple[int, PortMap] | None:
@@ -333,6 +341,7 @@ class Explorer:
             or ev.degree != len(deps)
         ):
             return None
+
         # Same place, seconds later: absolute bearings still agree, so they fix the rotation.
         # A twin junction a few decimetres away has other bearings (one of its edges leads
         # back to the point just left), which tells it from a bounce.
@@ -368,6 +377,7 @@ class Explorer:
             and self.map.node(f).kind == "boundary"
             and self.map.node(w).degree == ev.degree
             and tol.length_ok(length, edge.length_m)
+            and self._where_the_pass_began(ev, f, e)
         ):
             # Back from a dead end there is one place to arrive at; only the signature's
             # noisier parts (clearance, a departure angle) disagree: trust the topology.
@@ -416,6 +426,10 @@ class Explorer:
             self._note(f"expected node {w}, recognised node {found[0][0]} one edge further")
             self.partial_m = 0.0
             return found[0]
+        for back in (False, True):
+            went = self._walked_to(ev, a, length, back)
+            if went is not None:
+                return went
         wn = self.map.node(w)
         why = (
             f"expected node {w} (degree {wn.degree}, clearance {wn.clearance_m:.2f} m) after "
@@ -470,16 +484,29 @@ class Explorer:
         self.partial_m = 0.0
         return node, 0
 
-    def _far_departure(
-        self, ev: MeetPointReached, f: int, e: int, length: float
-    ) -> int | None:
+    def _where_the_pass_began(self, ev: MeetPointReached, f: int, e: int) -> bool:
+        """Whether the robot, back along edge ``e`` from ``f``, has homed where the recorded
+        pass over ``e`` met its far node (True when there is no recent pass to say): a twin
+        junction a few decimetres on has the same topology from a dead end."""
+        old = self._recent_pass(e)
+        if old is None:
+            return True
+        x, y = old.at(old.length_m if old.start == f else 0.0)
+        return math.hypot(ev.x_m - x, ev.y_m - y) <= self.p.twin_m
+
+    def _recent_pass(self, e: int) -> EdgePath | None:
+        """The recorded pass over edge ``e``, if the robot has travelled little since."""
+        path, odo = self.paths.get(e), self._odo
+        if path is None or odo is None:
+            return None
+        return path if odo.distance_m - path.end_distance_m <= self.p.split_recent_m else None
+
+    def _far_departure(self, ev: MeetPointReached, f: int, e: int, length: float) -> int | None:
         """Which departure of the meet point ``ev``, found ``length`` metres from node ``f``
         along edge ``e``, leads on along ``e``: from the recorded pass over ``e``."""
-        p, odo, a = self.p, self._odo, ev.arrival_index
-        path = self.paths.get(e)
-        if path is None or odo is None or a is None:
-            return None
-        if odo.distance_m - path.end_distance_m > p.split_recent_m:
+        p, a = self.p, ev.arrival_index
+        path = self._recent_pass(e)
+        if path is None or a is None:
             return None
         s, off = path.nearest(ev.x_m, ev.y_m)
         forward = path.start == f
@@ -560,9 +587,7 @@ class Explorer:
         self.hyps.live = self._age(survivors, {id(h) for h, _, _ in confirmed})
         if self.hyps.live:
             self.hyps.fragment.add(node)
-        fresh = candidates(
-            self.map, self.map.signature(node), tol, self.hyps.fragment | {node}, a
-        )
+        fresh = candidates(self.map, self.map.signature(node), tol, self.hyps.fragment | {node}, a)
         # A look-alike some open hypothesis already maps this node to adds nothing: that
         # hypothesis says the same and more, and has the evidence.
         implied = {h.mapping[node] for h in self.hyps.live if node in h.mapping}
@@ -617,12 +642,45 @@ class Explorer:
                     self.map.add_measurement(e, length)
                 self._leave(w, q)
                 return
+            if self._boundary_bounce(ev, f, j, length):
+                return
+            if self._walked_to_boundary(ev, length, False) or self._walked_to_boundary(
+                ev, length, True
+            ):
+                return
             self._abandon_hypotheses()
             self.plan = []
             b = self._add_boundary(ev)
             self._note(f"expected node {w} after edge {e}, found a boundary: node {b}")
             self._leave(b, 0)
             return
+        if not self._walked_to_boundary(ev, length, back=True):
+            self._boundary_on_new_edge(ev, f, j, length)
+
+    def _boundary_bounce(self, ev: BoundaryReached, f: int, j: int, length: float | None) -> bool:
+        """Back in the corner just left, moments later (the edge out of it was not held):
+        the same boundary point, by dead reckoning over the last metre. The robot tries its
+        way out once more rather than mapping the corner twice."""
+        p, odo = self.p, self._odo
+        here = None if odo is None else self.paths.live(f, odo.distance_m)
+        if (
+            self.map.node(f).kind != "boundary"
+            or here is None
+            or length is None
+            or length > p.bounce_length_m
+            or math.hypot(ev.x_m - here.points[0][1], ev.y_m - here.points[0][2]) > p.bounce_m
+            or self.bounces.get((f, j), 0) > p.bounce_retries
+        ):
+            return False
+        self.bounces[(f, j)] = self.bounces.get((f, j), 0) + 1
+        self._note(f"back at boundary {f}: the edge out of it could not be held")
+        self._leave(f, j)
+        return True
+
+    def _boundary_on_new_edge(
+        self, ev: BoundaryReached, f: int, j: int, length: float | None
+    ) -> None:
+        tol = self._tol()
         survivors = []
         confirmed = []
         for h in self.hyps.live:
@@ -681,8 +739,7 @@ class Explorer:
                 self._note(
                     f"node {node}: the evidence also fits {len(rivals)} other place(s): "
                     + "; ".join(
-                        ", ".join(f"{x}={c}" for x, (c, _) in sorted(pl.items()))
-                        for pl in rivals
+                        ", ".join(f"{x}={c}" for x, (c, _) in sorted(pl.items())) for pl in rivals
                     )
                 )
             tested = [h for h in self.hyps.live if h.tested]
@@ -832,6 +889,73 @@ class Explorer:
         if best == a or _angdiff(ev.departures_rad[best], ahead) > self.p.weak_through_rad:
             return None
         return best
+
+    def _walk(self, length: float | None, back: bool) -> Walk | None:
+        """Where the robot is if it went through the node it expected without homing there
+        (``back``: through the node it had just left, the departure not held)."""
+        if length is None or self.disturbed or self.leaving is None or self._odo is None:
+            return None
+        f, j = self.leaving
+        path = self.paths.live(f, self._odo.distance_m)
+        if path is None:
+            return None
+        walk = walk_back if back else walk_on
+        return walk(self.map, f, j, path, length, self._tol(), self.p.walk)
+
+    def _walked_to(
+        self, ev: MeetPointReached, a: int, length: float | None, back: bool
+    ) -> tuple[int, int] | None:
+        """The meet point ``ev`` placed by ``_walk``: a mapped node if the walk ends on one
+        and the signature agrees, else a new node on the unexplored departure it ends on."""
+        walk = self._walk(length, back)
+        if walk is None:
+            return None
+        if walk.known:
+            node = self.map.node(walk.node)
+            e = node.ports[walk.port]
+            assert e is not None
+            before = self.map.edge(e).other_end(walk.node, walk.port)[0]
+            k = self._match(self._seen(ev, a, before), a, walk.node, walk.port, None, 0.0)
+            if k is None:
+                return None
+            self._walked(walk, back, f"recognised node {walk.node}")
+            self.partial_m = 0.0
+            return walk.node, k
+        self._walked(walk, back, f"a new edge from node {walk.node}")
+        return self._new_edge(ev, self._seen(ev, a, walk.node), walk.node, walk.port, walk.rest_m)
+
+    def _walked_to_boundary(self, ev: BoundaryReached, length: float | None, back: bool) -> bool:
+        """``_walked_to`` for a boundary point; whether it placed it."""
+        walk = self._walk(length, back)
+        if walk is None:
+            return False
+        if walk.known:
+            if self.map.node(walk.node).kind != "boundary":
+                return False
+            self._walked(walk, back, f"recognised boundary {walk.node}")
+            self.plan = []
+            self._leave(walk.node, walk.port)
+            return True
+        self._walked(walk, back, f"a new edge from node {walk.node}")
+        self.plan = []
+        self._boundary_on_new_edge(ev, walk.node, walk.port, walk.rest_m)
+        return True
+
+    def _walked(self, walk: Walk, back: bool, found: str) -> None:
+        self.paths.restart()  # the record is of no one edge
+        passed = ", ".join(str(n) for n in walk.passed)
+        if back:
+            assert self.leaving is not None
+            f, j = self.leaving
+            self.bounces[(f, j)] = self.bounces.get((f, j), 0) + 1
+            if self.bounces[(f, j)] > self.p.bounce_retries and self.map.node(f).ports[j] is None:
+                self.frozen.add((f, j))
+            self._note(
+                f"departure {j} of node {f} not held: back through node(s) {passed} "
+                f"without homing, {found}"
+            )
+        else:
+            self._note(f"went through node(s) {passed} without homing (weak meet point), {found}")
 
     def _edge_left(self) -> int | None:
         """The map edge of the departure being traced, once it is known."""
