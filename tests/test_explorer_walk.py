@@ -48,7 +48,8 @@ def test_through_a_weak_junction_onto_its_unexplored_departure_is_a_new_edge_fro
     c = (4.0 + 3.0 * math.cos(math.radians(300)), 3.0 * math.sin(math.radians(300)))
     drive(ex, [(0.0, 0.0), (4.0, 0.0), c], ex._odo.distance_m)
     node, _ = ex._arrive(meet(c[0], c[1], [120, 200, 330], 120, 7.0))
-    assert node == 3 and "went through node(s) 2 without homing" in ex.notes[-2].text
+    assert node == 3
+    assert any("went through node(s) 2 without homing" in n.text for n in ex.notes)
     new = [e for e in ex.map.edges() if 3 in (e.u, e.v)]
     assert len(new) == 1 and (new[0].u, new[0].port_u) == (2, 2)
     assert new[0].length_m == pytest.approx(3.0, abs=0.01)
