@@ -383,6 +383,18 @@ class Explorer:
             # noisier parts (clearance, a departure angle) disagree: trust the topology.
             k = (q - a) % ev.degree
             self._note(f"node {w} confirmed by topology alone (back from boundary {f})")
+        elif (
+            k is None
+            and self.map.node(f).kind == "boundary"
+            and self.map.node(w).degree == ev.degree
+            and self._back_where_it_left(ev, f, e)
+        ):
+            # One edge's length is off (the way in wandered at the corner), but the robot has
+            # homed where it left for the dead end minutes ago, by dead reckoning over a few
+            # metres: the same junction. The length is not recorded.
+            self._note(f"node {w} confirmed by dead reckoning (back from boundary {f})")
+            self.partial_m = 0.0
+            return w, (q - a) % ev.degree
         if k is not None:
             if length is not None and not self.disturbed:
                 self.map.add_measurement(e, length)
@@ -493,6 +505,11 @@ class Explorer:
             return True
         x, y = old.at(old.length_m if old.start == f else 0.0)
         return math.hypot(ev.x_m - x, ev.y_m - y) <= self.p.twin_m
+
+    def _back_where_it_left(self, ev: MeetPointReached, f: int, e: int) -> bool:
+        """Whether the robot, back along edge ``e`` from ``f``, has homed where the recorded
+        pass over ``e`` left its far node (False when there is no recent pass to say)."""
+        return self._recent_pass(e) is not None and self._where_the_pass_began(ev, f, e)
 
     def _recent_pass(self, e: int) -> EdgePath | None:
         """The recorded pass over edge ``e``, if the robot has travelled little since."""

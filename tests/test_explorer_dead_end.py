@@ -1,0 +1,50 @@
+"""Back from a dead end, the robot homes where it left for it minutes ago: dead reckoning
+over those few metres names the junction even when the way in measured long."""
+
+from __future__ import annotations
+
+from hal.interfaces import NOMAD200_LIMITS
+from hal.types import Odometry
+from tests.test_explorer_split import drive, meet
+from tslam.core.explorer import Explorer
+from tslam.core.tracer import BoundaryReached
+from tslam.programs.sim_cmd import explore
+
+
+def into_a_dead_end(ex: Explorer) -> float:
+    """Junction A at (0, 0); its port towards 0 deg is traced to a corner 1.5 m on, which the
+    encoders measure as 2.1 m (the robot wandered at the corner)."""
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    assert ex._choose(meet(0.0, 0.0, [0, 120, 240], None, None)) == 0
+    d = drive(ex, [(0.0, 0.0), (1.5, 0.2), (1.5, -0.2), (1.5, 0.0)], 0.0)
+    ex._on_boundary(BoundaryReached(0.0, 1.5, 0.0, 0.4, 2.1))
+    assert [(e.u, e.v, e.length_m) for e in ex.map.edges()] == [(1, 2, 2.1)]
+    return d
+
+
+def test_home_where_it_left_for_the_dead_end_is_that_junction_though_the_length_is_off():
+    ex = Explorer(NOMAD200_LIMITS)
+    d = into_a_dead_end(ex)
+    drive(ex, [(1.5, 0.0), (0.03, 0.0)], d)
+    node, _ = ex._arrive(meet(0.03, 0.0, [0, 120, 240], 0, 1.45))
+    assert node == 1 and len(ex.map.nodes()) == 2
+    assert ex.notes[-1].text == "node 1 confirmed by dead reckoning (back from boundary 2)"
+    assert ex.map.edge(1).lengths_m == (2.1,)  # the disputed length is not recorded
+
+
+def test_a_junction_a_few_decimetres_off_is_not_taken_for_it():
+    ex = Explorer(NOMAD200_LIMITS)
+    d = into_a_dead_end(ex)
+    drive(ex, [(1.5, 0.0), (-0.4, 0.0)], d)  # a twin junction 0.4 m beyond A
+    ex._arrive(meet(-0.4, 0.0, [0, 120, 240], 0, 1.0))
+    assert ex.notes[-1].text.startswith("lost (expected node 1")
+
+
+def test_fig12_seed3_back_from_the_corner_is_not_lost():
+    """fig12 seed 3 measured m1's edge into the lower-left corner as 2.10 m (truly 1.47) and
+    went lost on coming back after 1.45 m at 364 s; it then mapped fig12 over and over."""
+    run = explore("fig12", 3, "paper", duration_s=500.0, progress=False)
+    ex = run.explorer
+    assert not any(n.text.startswith("lost (expected") for n in ex.notes), ex.notes
+    assert any("confirmed by dead reckoning" in n.text for n in ex.notes)
+    assert ex.done and not ex.map.unexplored() and len(ex.map.edges()) == 6
