@@ -100,6 +100,11 @@ class ExplorerParams:
     split_look_m: float = 0.8  # the pass this far on shows which departure leads on,
     split_angle_rad: float = math.radians(35.0)  # ... within this angle
     split_margin_rad: float = math.radians(20.0)  # ... and clearly closer than any other
+    # Dead reckoning turns slowly (section V-C): a place matched with its departures turned
+    # further than this from the old node's, given the metres driven between the two
+    # readings, is not that place. It is what tells fig15's mirror images apart.
+    heading_base_rad: float = math.radians(25.0)
+    heading_drift_rad_per_m: float = math.radians(0.25)
     # Gone through the expected node without homing (a weak meet point): this traversal's
     # own dead-reckoned path says which way the robot turned there (``tslam.core.walkon``).
     walk: WalkParams = field(default_factory=WalkParams)
@@ -158,6 +163,7 @@ class Explorer:
         self._now = 0.0
         self._odo: Odometry | None = None
         self.paths = EdgePaths()
+        self.born: dict[int, float] = {}  # meet node -> encoder distance its angles were read at
 
     @property
     def mode(self) -> Mode:
@@ -740,7 +746,17 @@ class Explorer:
         tested = [h for h in self.hyps.live if h.tested]
         if len(tested) == 1 and tested[0].proven(self.p.merge_evidence):
             h = tested[0]
-            search = other_placements(self.map, h, self.p.tol)
+            turned = self._heading_misfits(h)
+            if turned:
+                # Proven by topology, refuted by dead reckoning: a mirror image (fig15). Only
+                # here, at the merge: a hypothesis on its way to proof is left to predictions.
+                self.hyps.live.remove(h)
+                self._note(
+                    f"node {node}: a place that fits the evidence is turned further than dead "
+                    f"reckoning drifts (nodes {', '.join(map(str, turned))}): not merged"
+                )
+                return self._resolve(node)
+            search = other_placements(self.map, h, self.p.tol, fits=self._heading_fits)
             if search is None:
                 self._note(f"node {node}: too many places fit the evidence to check: not merged")
                 self._abandon_hypotheses()
@@ -983,7 +999,29 @@ class Explorer:
 
     def _add_meet(self, ev: MeetPointReached) -> int:
         truth = self.truth() if self.truth else None
-        return self.map.add_meet(ev.clearance_m, ev.departures_rad, (ev.x_m, ev.y_m), truth)
+        node = self.map.add_meet(ev.clearance_m, ev.departures_rad, (ev.x_m, ev.y_m), truth)
+        if self._odo is not None:
+            self.born[node] = self._odo.distance_m
+        return node
+
+    def _heading_fits(self, x: int, c: int, k: int) -> bool:
+        """Whether node ``x`` can be old node ``c`` under rotation ``k`` as far as dead
+        reckoning's heading goes: their departures, each in the odometry frame of its own
+        reading, are turned no more than the drift between those readings allows."""
+        bx, bc = self.born.get(x), self.born.get(c)
+        if bx is None or bc is None or not self.map.has_node(x) or not self.map.has_node(c):
+            return True
+        nx_, nc = self.map.node(x), self.map.node(c)
+        if nx_.kind != "meet" or nc.kind != "meet" or nx_.degree != nc.degree:
+            return True
+        deg = nx_.degree
+        turns = [nx_.departures_rad[j] - nc.departures_rad[(j + k) % deg] for j in range(deg)]
+        turn = math.atan2(sum(map(math.sin, turns)), sum(map(math.cos, turns)))
+        p = self.p
+        return abs(turn) <= p.heading_base_rad + p.heading_drift_rad_per_m * abs(bx - bc)
+
+    def _heading_misfits(self, h: Hypothesis) -> list[int]:
+        return [x for x, (c, k) in sorted(h.mapping.items()) if not self._heading_fits(x, c, k)]
 
     def _add_boundary(self, ev: BoundaryReached) -> int:
         truth = self.truth() if self.truth else None

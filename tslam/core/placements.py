@@ -13,13 +13,14 @@ rather than guessed at.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 from tslam.core.localize import Hypothesis, Tolerances
 from tslam.core.signature import rotations
 from tslam.core.topomap import TopoMap
 
 Placement = dict[int, tuple[int, int]]  # fragment node -> (old node, rotation)
+PairFit = Callable[[int, int, int], bool]  # (fragment node, old node, rotation) -> allowed
 
 
 def other_placements(
@@ -28,6 +29,7 @@ def other_placements(
     tol: Tolerances,
     limit: int = 4,
     budget: int = 20000,
+    fits: PairFit | None = None,
 ) -> tuple[list[Placement], bool] | None:
     """Up to ``limit`` placements of ``h``'s fragment nodes other than ``h``'s own that fit
     the map as well, and whether ``h``'s own fits (an edge measured with a detour matched
@@ -36,7 +38,7 @@ def other_placements(
     """
     nodes = [x for x in h.mapping if tmap.has_node(x)]
     own = {x: h.mapping[x] for x in nodes}
-    found = placements(tmap, nodes, tol, limit + 1, budget)
+    found = placements(tmap, nodes, tol, limit + 1, budget, fits)
     if found is None:
         return None
     others = [p for p in found if p != own]
@@ -49,14 +51,16 @@ def placements(
     tol: Tolerances,
     limit: int,
     budget: int = 20000,
+    fits: PairFit | None = None,
 ) -> list[Placement] | None:
     """Up to ``limit`` placements of ``nodes`` and the edges between them on the map's
-    other nodes; None if the search ran out of ``budget`` steps."""
+    other nodes, each pair passing ``fits`` if given; None if the search ran out of
+    ``budget`` steps."""
     links = _links(tmap, nodes)
     order = _order(nodes, links)
     found: list[Placement] = []
     try:
-        for placement in _place(tmap, order, links, set(nodes), tol, {}, [budget]):
+        for placement in _place(tmap, order, links, set(nodes), tol, {}, [budget], fits):
             found.append(placement)
             if len(found) >= limit:
                 break
@@ -111,6 +115,7 @@ def _place(
     tol: Tolerances,
     done: Placement,
     budget: list[int],
+    fits: PairFit | None,
 ) -> Iterator[Placement]:
     if len(done) == len(order):
         yield dict(done)
@@ -125,8 +130,10 @@ def _place(
             continue
         if not _edges_fit(tmap, x, c, k, links, tol, done):
             continue
+        if fits is not None and not fits(x, c, k):
+            continue
         done[x] = (c, k)
-        yield from _place(tmap, order, links, placed, tol, done, budget)
+        yield from _place(tmap, order, links, placed, tol, done, budget, fits)
         del done[x]
 
 
