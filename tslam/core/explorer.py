@@ -11,8 +11,16 @@ take; the arbiter first decides where the robot is:
 * it was exploring a new edge: the meet point goes into the map, and if it looks like an old
   one, localization starts (``tslam.core.localize``): the arbiter then picks the departures that
   test the hypotheses, merges when one is proven, and records an ambiguity when none can be;
+* it went through a junction without homing there (the expected node, a weak one; or the
+  node it had just left, the departure not held): this traversal's own dead-reckoned path
+  says which way it turned there (``tslam.core.walkon``), and so which node it is at, or
+  which unexplored departure it found something new on;
 * it does not know where it came from (it lost its edge, or an expected node was not there):
   the node goes into the map unattached and every old node that looks like it is a hypothesis.
+
+Dead reckoning is otherwise trusted only over a few metres (a return from a dead end) and, at
+a merge, as a bound on how far the heading can have turned since the old node was read: a
+mirror image of a place (fig15) fits the topology but is turned too far.
 
 Then it picks the next departure: a test if hypotheses are open, else the next step of a
 planned path, else an unexplored departure here, else a path in the graph to the nearest node
