@@ -368,9 +368,7 @@ class Explorer:
         if misfit(shift) > p.bounce_angle_rad:
             return None
         key = self.leaving
-        self.bounces[key] = self.bounces.get(key, 0) + 1
-        if self.bounces[key] > p.bounce_retries and self.map.node(key[0]).ports[key[1]] is None:
-            self.frozen.add(key)
+        self._count_bounce(key)
         self._note(f"back at node {node}: departure {key[1]} could not be held")
         pm = pm.shifted_events(shift, ev.degree)
         a = ev.arrival_index
@@ -386,23 +384,20 @@ class Explorer:
         a = ev.arrival_index
         assert a is not None
         k = self._match(seen, a, w, q, length, edge.length_m)
-        if (
+        dead_end = (
             k is None
             and self.map.node(f).kind == "boundary"
             and self.map.node(w).degree == ev.degree
-            and tol.length_ok(length, edge.length_m)
-            and self._where_the_pass_began(ev, f, e)
-        ):
+        )
+        # None when no recent pass can say; a twin junction a few decimetres on has the same
+        # topology from a dead end.
+        left_here = self._where_the_pass_left(ev, f, e) if dead_end else None
+        if dead_end and tol.length_ok(length, edge.length_m) and left_here is not False:
             # Back from a dead end there is one place to arrive at; only the signature's
             # noisier parts (clearance, a departure angle) disagree: trust the topology.
             k = (q - a) % ev.degree
             self._note(f"node {w} confirmed by topology alone (back from boundary {f})")
-        elif (
-            k is None
-            and self.map.node(f).kind == "boundary"
-            and self.map.node(w).degree == ev.degree
-            and self._back_where_it_left(ev, f, e)
-        ):
+        elif left_here:
             # One edge's length is off (the way in wandered at the corner), but the robot has
             # homed where it left for the dead end minutes ago, by dead reckoning over a few
             # metres: the same junction. The length is not recorded.
@@ -510,20 +505,14 @@ class Explorer:
         self.partial_m = 0.0
         return node, 0
 
-    def _where_the_pass_began(self, ev: MeetPointReached, f: int, e: int) -> bool:
+    def _where_the_pass_left(self, ev: MeetPointReached, f: int, e: int) -> bool | None:
         """Whether the robot, back along edge ``e`` from ``f``, has homed where the recorded
-        pass over ``e`` met its far node (True when there is no recent pass to say): a twin
-        junction a few decimetres on has the same topology from a dead end."""
+        pass over ``e`` met its far node; None when there is no recent pass to say."""
         old = self._recent_pass(e)
         if old is None:
-            return True
+            return None
         x, y = old.at(old.length_m if old.start == f else 0.0)
         return math.hypot(ev.x_m - x, ev.y_m - y) <= self.p.twin_m
-
-    def _back_where_it_left(self, ev: MeetPointReached, f: int, e: int) -> bool:
-        """Whether the robot, back along edge ``e`` from ``f``, has homed where the recorded
-        pass over ``e`` left its far node (False when there is no recent pass to say)."""
-        return self._recent_pass(e) is not None and self._where_the_pass_began(ev, f, e)
 
     def _recent_pass(self, e: int) -> EdgePath | None:
         """The recorded pass over edge ``e``, if the robot has travelled little since."""
@@ -931,6 +920,14 @@ class Explorer:
             return None
         return best
 
+    def _count_bounce(self, key: tuple[int, int]) -> None:
+        """One more time departure ``key`` was not held; after the retries an unexplored one
+        is given up."""
+        node, port = key
+        self.bounces[key] = self.bounces.get(key, 0) + 1
+        if self.bounces[key] > self.p.bounce_retries and self.map.node(node).ports[port] is None:
+            self.frozen.add(key)
+
     def _walk(self, length: float | None, back: bool) -> Walk | None:
         """Where the robot is if it went through the node it expected without homing there
         (``back``: through the node it had just left, the departure not held)."""
@@ -988,9 +985,7 @@ class Explorer:
         if back:
             assert self.leaving is not None
             f, j = self.leaving
-            self.bounces[(f, j)] = self.bounces.get((f, j), 0) + 1
-            if self.bounces[(f, j)] > self.p.bounce_retries and self.map.node(f).ports[j] is None:
-                self.frozen.add((f, j))
+            self._count_bounce((f, j))
             self._note(
                 f"departure {j} of node {f} not held: back through node(s) {passed} "
                 f"without homing, {found}"
