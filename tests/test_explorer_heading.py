@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from hal.interfaces import NOMAD200_LIMITS
-from tslam.core.explorer import Explorer
+from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
 from tslam.programs.sim_cmd import explore, report
 
@@ -33,7 +33,10 @@ def test_a_look_alike_turned_by_half_a_turn_is_refused_unless_the_readings_are_f
 
 def test_fig15_seed1_mirror_image_is_not_merged():
     """fig15 seed 1 merged a corner of the room onto the opposite corner at 2284 s, its
-    departures turned 169 deg from the old ones after 150 m of driving."""
-    run = explore("fig15", 1, "paper", duration_s=2400.0, progress=False)
+    departures turned 169 deg from the old ones after 150 m of driving. (With the crowd of
+    look-alikes weighed, that hypothesis is not proven so soon; the heading check is tested
+    here alone.)"""
+    params = ExplorerParams(weigh_crowd=False)
+    run = explore("fig15", 1, "paper", duration_s=2400.0, progress=False, params=params)
     assert any("turned further than dead reckoning drifts" in n.text for n in run.explorer.notes)
     assert report(run, "fig15", 1, "paper")["false_merges"] == 0

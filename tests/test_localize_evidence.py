@@ -2,8 +2,9 @@
 
 A false merge corrupts the map for good, so the evidence rules are pinned here: a dead end
 confirms less than a meet point (every dead end looks alike; fig16's mirror-image corridors
-agree on them), a hypothesis that began off the graph needs one confirmation more, and an
-edge on which the robot left the GVG and came back is only a lower bound on the length.
+agree on them), a hypothesis that began off the graph needs one confirmation more, so does
+one chosen among a crowd of look-alikes, and an edge on which the robot left the GVG and came
+back is only a lower bound on the length.
 """
 
 from __future__ import annotations
@@ -41,3 +42,21 @@ def test_a_disturbed_length_refutes_only_when_too_short():
     assert bound.length_ok(8.0, mapped)  # ... but wandering only ever adds length
     assert not bound.length_ok(3.9, mapped)  # shorter than the edge can be: still refuted
     assert tol.length_ok(None, mapped) and bound.length_ok(None, mapped)
+
+
+@pytest.mark.parametrize(
+    ("crowd", "needed"),
+    [
+        (1, 2),  # one look-alike: the paper's two confirmations
+        (4, 2),
+        (5, 3),  # more than two bits of prior odds against each: one more
+        (16, 3),
+        (37, 4),  # fig14 at 9346 s (seed 4, paper drift): 37 look-alikes, 3 places merged wrong
+        (73, 5),  # fig15 at 10884 s (seed 3): 73 look-alikes, 3 places merged wrong
+    ],
+)
+def test_a_map_crowded_with_look_alikes_needs_more_evidence(crowd, needed):
+    def proven(confirmed: int) -> bool:
+        return Hypothesis({7: (3, 0)}, confirmed=confirmed, crowd=crowd).proven(2)
+
+    assert proven(needed) and not proven(needed - 1)

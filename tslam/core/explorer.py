@@ -10,7 +10,9 @@ take; the arbiter first decides where the robot is:
   further than expected (the robot homed past a weak meet point) is recognised;
 * it was exploring a new edge: the meet point goes into the map, and if it looks like an old
   one, localization starts (``tslam.core.localize``): the arbiter then picks the departures that
-  test the hypotheses, merges when one is proven, and records an ambiguity when none can be;
+  test the hypotheses, merges when one is proven (two confirmed predictions, more when the
+  map holds many look-alikes: each is a priori as likely), and records an ambiguity when none
+  can be;
 * it went through a junction without homing there (the expected node, a weak one; or the
   node it had just left, the departure not held): this traversal's own dead-reckoned path
   says which way it turned there (``tslam.core.walkon``), and so which node it is at, or
@@ -82,7 +84,8 @@ class Mode(enum.Enum):
 @dataclass(frozen=True)
 class ExplorerParams:
     tol: Tolerances = field(default_factory=Tolerances)
-    merge_evidence: int = 2  # confirmed predictions that prove a single hypothesis
+    merge_evidence: int = 2  # confirmed predictions that prove a single hypothesis ...
+    weigh_crowd: bool = True  # ... and more where many old nodes look alike (localize.py)
     weak_through_rad: float = math.radians(40.0)  # "straight on" at a weak meet point
     # The tracer may leave its edge for a moment (a silent patch, a bump) and re-access it.
     # Back on an edge within this (dead-reckoned, so short-range) distance, it is the same one.
@@ -492,7 +495,7 @@ class Explorer:
             if self.map.node(c).ports[(far + k) % deg] is None
         ]
         for c, k in fresh:
-            self.hyps.live.append(Hypothesis({node: (c, k)}))
+            self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=len(fresh)))
         if self.hyps.live:
             self.hyps.fragment.add(node)
         else:
@@ -613,7 +616,7 @@ class Explorer:
         implied = {h.mapping[node] for h in self.hyps.live if node in h.mapping}
         fresh = [ck for ck in fresh if ck not in implied]
         for c, k in fresh:
-            self.hyps.live.append(Hypothesis({node: (c, k)}))
+            self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=len(fresh)))
         if fresh:
             self.hyps.fragment.add(node)
         if dropped or fresh:
@@ -634,7 +637,9 @@ class Explorer:
         fresh = candidates(self.map, self.map.signature(node), tol, {node}, None)
         for c, k in fresh:
             self.hyps.live.append(
-                Hypothesis({node: (c, k)}, lost_start=not resuming, resumed=resuming)
+                Hypothesis(
+                    {node: (c, k)}, lost_start=not resuming, resumed=resuming, crowd=len(fresh)
+                )
             )
         if fresh:
             self.hyps.fragment.add(node)
@@ -741,7 +746,7 @@ class Explorer:
         # A hypothesis no prediction has tested yet is in the same position as "all of it is
         # new": possible, unrefuted, unsupported. Only tested hypotheses compete.
         tested = [h for h in self.hyps.live if h.tested]
-        if len(tested) == 1 and tested[0].proven(self.p.merge_evidence):
+        if len(tested) == 1 and tested[0].proven(self.p.merge_evidence, self.p.weigh_crowd):
             h = tested[0]
             turned = self._heading_misfits(h)
             if turned:

@@ -57,17 +57,26 @@ class Hypothesis:
     # building when it stopped, so the stored map is the prior: one surviving candidate that
     # nothing more can test is the paper's "one candidate remains", not a guess.
     resumed: bool = False
+    # How many old nodes looked like the fragment's node when this hypothesis was made. Each
+    # is a priori as likely as the next, so the odds for any one of them start at one in
+    # ``crowd``; a confirmed prediction is worth about two bits (a length within a tolerance
+    # some fraction of the edge, departure angles within 25 degrees), and a map crowded with
+    # look-alikes (duplicates of a lab's junctions, fig15's aisles) needs that much more
+    # evidence before one candidate is as good as proven.
+    crowd: int = 1
 
     @property
     def tested(self) -> bool:
         return self.confirmed + self.dead_ends > 0
 
-    def proven(self, merge_evidence: int) -> bool:
+    def proven(self, merge_evidence: int, weigh_crowd: bool = True) -> bool:
         """Enough evidence to merge, if no other hypothesis is left. Dead ends count half,
         and a hypothesis that began off the graph needs one confirmation more: mirror-image
         corridors (fig16) agree on dead ends, and a node reached off the graph was matched on
-        its signature alone."""
+        its signature alone. With ``weigh_crowd``, a crowd of look-alikes asks for more."""
         need = merge_evidence + (1 if self.lost_start else 0)
+        if weigh_crowd:
+            need += crowd_evidence(self.crowd)
         return self.confirmed >= 1 and self.confirmed + 0.5 * self.dead_ends >= need
 
     def image_port(self, tmap: TopoMap, node: int, port: int) -> tuple[int, int] | None:
@@ -75,6 +84,12 @@ class Hypothesis:
             return None
         c, k = self.mapping[node]
         return c, (port + k) % tmap.node(c).degree
+
+
+def crowd_evidence(crowd: int) -> int:
+    """Confirmations needed beyond the usual to single out one of ``crowd`` look-alikes: one
+    per two bits of prior odds, none for up to four."""
+    return max(0, math.ceil(0.5 * math.log2(max(crowd, 1))) - 1)
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ from sim_backend.backend import SimBackend
 from sim_backend.explore_scoring import naive_baseline, score_exploration, true_node_of
 from sim_backend.ground_truth import GroundTruthGVG, compute_gvg
 from sim_backend.odometry_model import DRIFT_LEVELS
-from tslam.core.explorer import Explorer
+from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.topomap import TopoMap
 from tslam.core.tracer import MeetPointReached
 from tslam.programs.cli import UserError
@@ -77,8 +77,10 @@ def explore(
     rate_hz: float = 10.0,
     progress: bool = True,
     backend_choice: BackendChoice | None = None,
+    params: ExplorerParams | None = None,
 ) -> Run:
-    """Explore ``world`` until the arbiter says it is done or ``duration_s`` runs out."""
+    """Explore ``world`` until the arbiter says it is done or ``duration_s`` runs out
+    (``params``: the arbiter's settings, the defaults if None)."""
     limit = DEFAULT_LIMIT_S if duration_s is None else duration_s
     if not (limit > 0 and math.isfinite(limit)):
         raise UserError(f"--duration must be a positive number of seconds, got {duration_s}")
@@ -92,7 +94,7 @@ def explore(
         tp = robot.true_pose()
         return (tp.x, tp.y)
 
-    explorer = Explorer(backend.limits, truth=truth)
+    explorer = Explorer(backend.limits, params=params, truth=truth)
     run = Run(backend, explorer, gvg)
     period = 1.0 / rate_hz
     started = time.perf_counter()
