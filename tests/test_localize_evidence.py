@@ -51,8 +51,8 @@ def test_a_disturbed_length_refutes_only_when_too_short():
         (4, 2),
         (5, 3),  # more than two bits of prior odds against each: one more
         (16, 3),
-        (37, 4),  # fig14 at 9346 s (seed 4, paper drift): 37 look-alikes, 3 places merged wrong
-        (73, 5),  # fig15 at 10884 s (seed 3): 73 look-alikes, 3 places merged wrong
+        (37, 4),  # a trial build's fig14 seed 4 merged 3 places wrong among 37 look-alikes
+        (73, 5),  # ... and its fig15 seed 3, among 73
     ],
 )
 def test_a_map_crowded_with_look_alikes_needs_more_evidence(crowd, needed):
