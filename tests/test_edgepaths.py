@@ -43,3 +43,18 @@ def test_only_the_latest_edges_are_kept_and_a_restart_forgets_the_live_one():
     paths.add(odo(5.0, 0.0, 9.6))
     paths.finish(4, start=1, distance_m=9.6)  # one point is no path
     assert paths.get(4) is None
+
+
+def test_a_pass_is_put_in_the_measure_of_the_edge_length():
+    """The encoders count the weave the edge's own length leaves out: the pass's distances
+    are scaled to the measured length, unless the two are too far apart to be one pass."""
+    paths = EdgePaths(spacing_m=0.1)
+    for i in range(41):
+        paths.add(odo(0.05 * i, 0.0, 0.05 * i))
+    p = paths.live(start=0, distance_m=2.0)
+    assert p is not None
+    q = p.measured_as(0.9 * p.length_m)
+    assert q.length_m == pytest.approx(0.9 * p.length_m)
+    assert q.at(0.9) == pytest.approx(p.at(1.0))  # the same place, a shorter measure
+    assert p.measured_as(0.5 * p.length_m) is p  # not this traversal: left for the check
+    assert p.measured_as(1.5 * p.length_m) is p

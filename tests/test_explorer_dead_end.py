@@ -42,9 +42,11 @@ def test_a_junction_a_few_decimetres_off_is_not_taken_for_it():
 
 def test_fig12_seed3_back_from_the_corner_is_not_lost():
     """fig12 seed 3 measured m1's edge into the lower-left corner as 2.10 m (truly 1.47) and
-    went lost on coming back after 1.45 m at 364 s; it then mapped fig12 over and over."""
+    went lost on coming back after 1.45 m at 364 s; it then mapped fig12 over and over. Dead
+    reckoning named the junction then; the edge now measures right (edgelength.py), and the
+    tests above keep the dead-reckoning confirmation for a way in that still measures long."""
     run = explore("fig12", 3, "paper", duration_s=500.0, progress=False)
     ex = run.explorer
     assert not any(n.text.startswith("lost (expected") for n in ex.notes), ex.notes
-    assert any("confirmed by dead reckoning" in n.text for n in ex.notes)
     assert ex.done and not ex.map.unexplored() and len(ex.map.edges()) == 6
+

@@ -3,12 +3,11 @@ has just left.
 
 Scored against the ground truth (junctions closer than 0.6 m taken as one, as the robot
 sees them) over the first 20 simulated minutes, seed 1:
-- fig1: an edge's encoder length is what localization compares with the map, so the noisy
-  third echo that makes homing wander must not count: the length runs to where homing began
-  plus the straight step from there (before, the 90th percentile error was 0.55 m, the
-  largest 3.7 m);
-- fig14:
-- leaving a wide junction, one noisy echo re-armed meet detection while the three obstacles
+- fig1: an edge's length is what localization compares with the map, so the noisy third
+  echo that makes homing wander must not count: the length is taken along the edge up to
+  where homing began, then straight to the meet point (before, the 90th percentile error was
+  0.55 m, the largest 3.7 m);
+- fig14: leaving a wide junction, one noisy echo re-armed meet detection while the three obstacles
   were still nearly equidistant, and the robot homed back onto the junction it had left
   ("back at node ...": 7 to 15 times in 2000 s before).
 """

@@ -31,6 +31,20 @@ class EdgePath:
         best = min(self.points, key=lambda p: (p[1] - x) ** 2 + (p[2] - y) ** 2)
         return best[0], math.hypot(best[1] - x, best[2] - y)
 
+    def measured_as(self, length_m: float) -> EdgePath:
+        """The path with its distances in the measure of ``length_m``, the traversal's edge
+        length: the encoders count the weave about the edge, which the edge's own length
+        leaves out (edgelength.py), so the two differ by some per cent. A ratio beyond that
+        means the record is not of this traversal; the path is then returned as it is, for
+        the caller's length check to refuse."""
+        own = self.length_m
+        if own <= 0.0 or not 0.75 <= length_m / own <= 1.05:
+            return self
+        k = length_m / own
+        return EdgePath(
+            self.start, tuple((s * k, x, y) for s, x, y in self.points), self.end_distance_m
+        )
+
     def at(self, s: float) -> tuple[float, float]:
         """The point ``s`` metres from the start (clamped to the path)."""
         pts = self.points

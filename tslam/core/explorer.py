@@ -522,7 +522,9 @@ class Explorer:
         path, odo = self.paths.get(e), self._odo
         if path is None or odo is None:
             return None
-        return path if odo.distance_m - path.end_distance_m <= self.p.split_recent_m else None
+        if odo.distance_m - path.end_distance_m > self.p.split_recent_m:
+            return None
+        return path.measured_as(self.map.edge(e).length_m)
 
     def _far_departure(self, ev: MeetPointReached, f: int, e: int, length: float) -> int | None:
         """Which departure of the meet point ``ev``, found ``length`` metres from node ``f``
@@ -943,7 +945,7 @@ class Explorer:
         if path is None:
             return None
         walk = walk_back if back else walk_on
-        return walk(self.map, f, j, path, length, self._tol(), self.p.walk)
+        return walk(self.map, f, j, path.measured_as(length), length, self._tol(), self.p.walk)
 
     def _walked_to(
         self, ev: MeetPointReached, a: int, length: float | None, back: bool

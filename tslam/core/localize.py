@@ -28,10 +28,14 @@ from tslam.core.topomap import TopoMap
 class Tolerances:
     clearance_m: float = 0.15
     angle_rad: float = math.radians(25.0)
-    length_abs_m: float = 0.35  # encoder lengths include homing and detours ...
-    length_rel: float = 0.12  # ... so the tolerance grows with the edge
+    # An edge's length is its own (edgelength.py), off by where homing stopped at each end
+    # and by what a chord across a detour misses: 0.16-0.18 m at the 90th percentile on fig1
+    # and fig13, 0.41-0.48 m at worst, against 0.25-0.31 m and 0.9-1.2 m when it was the
+    # encoders' distance and these were 0.35 m and 12 %.
+    length_abs_m: float = 0.25
+    length_rel: float = 0.08  # ... and the tolerance grows with the edge
     # The robot left the edge and came back to it on the way: the wandering only adds to
-    # the encoder length, so a shorter measurement still refutes and a longer one does not.
+    # the measured length, so a shorter measurement still refutes and a longer one does not.
     at_least: bool = False
 
     def length_ok(self, measured: float | None, mapped: float) -> bool:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from hal.interfaces import DriveLimits
 from hal.types import DriveStatus, Odometry, SonarScan, Twist
 from tslam.core import laws
+from tslam.core.edgelength import EdgeOdometer, step_onto_edge
 from tslam.core.sensing import Obstacle, RingSensor
 from tslam.core.sweep import Sweep
 
@@ -81,7 +82,7 @@ class MeetPointReached:
     departures_rad: tuple[float, ...]  # odometry frame, counter-clockwise
     arrival_index: int | None  # which departure the robot came in by
     relative_rad: tuple[float, ...]  # departure angles measured from the arrival edge
-    edge_length_m: float | None = None  # encoder length of the edge that ended here
+    edge_length_m: float | None = None  # length of the edge that ended here
 
 
 @dataclass(frozen=True)
@@ -96,7 +97,7 @@ class BoundaryReached:
 @dataclass(frozen=True)
 class EdgeTraversed:
     stamp_s: float
-    length_m: float  # from the translation encoder over this edge only
+    length_m: float  # the edge's own, from dead reckoning over this edge only (edgelength.py)
     start: str  # "meet" or "boundary"
     end: str
 
@@ -136,14 +137,15 @@ class _State:
     # Where homing began and the edge's tangent there: near a junction the two closest
     # obstacles may belong to another of its edges, so the tangent the trace law keeps while
     # homing wanders can point along the wrong edge. The arrival edge is the one traced in.
-    # Homing also wanders (a noisy third echo pulls the circumcentre about), so the edge's
-    # length is the encoder distance to where homing began plus the straight step from there.
-    approach: tuple[float, float, float, float, float] | None = None  # x, y, tangent, distance
+    approach: tuple[float, float, float, float] | None = None  # x, y, tangent
     # Where the robot was while tracing (encoder distance, x, y; odometry frame), a metre's
     # worth: the way it really came in. Close to a junction the trace law's tangent can swing
     # onto another of its edges a moment before homing starts.
     trail: deque[tuple[float, float, float]] = field(default_factory=lambda: deque(maxlen=64))
     last_seen: float = 0.0
+    # The edge's length: its own, not the weaving path's, and homing's wander left out (a
+    # noisy third echo pulls the circumcentre about): see edgelength.py.
+    odometer: EdgeOdometer = field(default_factory=EdgeOdometer)
     last_twist: Twist = field(default_factory=Twist)
     # Which way the base last translated: a contact that stops the robot zeroes the command,
     # and the way out is away from where it was going, not always backwards.
@@ -259,7 +261,7 @@ class Tracer:
         if s.armed and self._meet_near(obs, odo):
             s.behaviour = Behaviour.HOME
             if s.tangent is not None and self._approach(odo) is None:
-                s.approach = (odo.x_m, odo.y_m, *self._came_along(odo, s.tangent), odo.distance_m)
+                s.approach = (odo.x_m, odo.y_m, *self._came_along(odo, s.tangent))
             return self._home(obs, odo, now, events)
         prev = _to_robot(s.tangent, odo) if s.tangent else None
         out = laws.trace_velocity(obs[0], obs[1], prev, p.alpha_mps, p.beta_per_s)
@@ -267,6 +269,10 @@ class Tracer:
             return s.last_twist
         v, t = out
         s.tangent = _to_odom(t, odo)
+        o1, o2 = obs[0], obs[1]
+        step = step_onto_edge(o1.distance_m, (o1.gx, o1.gy), o2.distance_m, (o2.gx, o2.gy))
+        if step is not None:
+            s.odometer.on_edge(odo.x_m, odo.y_m, odo.distance_m, _to_odom(step, odo))
         if not s.trail or odo.distance_m - s.trail[-1][0] >= 0.02:
             s.trail.append((odo.distance_m, odo.x_m, odo.y_m))
         return v
@@ -389,13 +395,10 @@ class Tracer:
         self, odo: Odometry, now: float, kind: str, events: list[Event]
     ) -> float | None:
         s = self.s
-        length = None
-        if s.node_distance is not None:
-            length = odo.distance_m - s.node_distance
-            a = self._approach(odo) if kind == "meet" else None
-            if a is not None and a[4] >= s.node_distance:
-                length = a[4] - s.node_distance + math.hypot(odo.x_m - a[0], odo.y_m - a[1])
+        length = s.odometer.length_to(odo.x_m, odo.y_m)  # None before the first node
+        if length is not None:
             events.append(EdgeTraversed(now, length, s.node_kind, kind))
+        s.odometer.start(odo.x_m, odo.y_m)
         s.node_distance = odo.distance_m
         s.node_kind = kind
         return length
@@ -414,7 +417,7 @@ class Tracer:
             return tangent
         return dx / n, dy / n
 
-    def _approach(self, odo: Odometry) -> tuple[float, float, float, float, float] | None:
+    def _approach(self, odo: Odometry) -> tuple[float, float, float, float] | None:
         """Where homing onto this meet point began, if it began close enough to count."""
         a = self.s.approach
         if a is None or math.hypot(odo.x_m - a[0], odo.y_m - a[1]) > self.p.approach_keep_m:
