@@ -50,3 +50,25 @@ def test_fig12_seed3_back_from_the_corner_is_not_lost():
     assert not any(n.text.startswith("lost (expected") for n in ex.notes), ex.notes
     assert ex.done and not ex.map.unexplored() and len(ex.map.edges()) == 6
 
+
+def test_a_finished_fragment_is_not_called_a_complete_exploration():
+    """Lost once, the robot maps a fragment of its own; when that fragment has nothing left
+    but the first still has departures it cannot reach, the map is not complete."""
+    ex = Explorer(NOMAD200_LIMITS)
+    ex.map.add_meet(1.0, [0.0, 2.0, 4.0], (0.0, 0.0))  # the first fragment: nothing explored
+    b1 = ex.map.add_boundary(0.4, (5.0, 0.0))
+    b2 = ex.map.add_boundary(0.4, (6.0, 0.0))
+    ex.map.connect(b1, 0, b2, 0, 1.0)
+    ex._hold(b2)
+    assert ex.done
+    assert ex.notes[-1].text.startswith("nothing left to explore from here"), ex.notes
+    assert "3 departure(s) unexplored" in ex.notes[-1].text
+
+
+def test_a_whole_map_explored_is_complete():
+    ex = Explorer(NOMAD200_LIMITS)
+    b1 = ex.map.add_boundary(0.4, (5.0, 0.0))
+    b2 = ex.map.add_boundary(0.4, (6.0, 0.0))
+    ex.map.connect(b1, 0, b2, 0, 1.0)
+    ex._hold(b2)
+    assert ex.done and ex.notes[-1].text == "exploration complete: 2 nodes, 1 edges"

@@ -259,7 +259,16 @@ class Explorer:
             self._note(f"at node {node}, as ordered: holding")
         elif not self.done:
             self.done = True
-            self._note(f"exploration complete: {self._size()}")
+            left = len(self.unexplored())
+            if left:
+                # Other fragments of the map (begun when the robot was lost) still have
+                # departures, but none is reachable from a place the robot can name.
+                self._note(
+                    f"nothing left to explore from here: {self._size()}, {left} departure(s) "
+                    "unexplored in fragments the robot has not placed itself in"
+                )
+            else:
+                self._note(f"exploration complete: {self._size()}")
 
     def _watch_detour(self, odo: Odometry) -> None:
         b = self.tracer.behaviour
