@@ -34,10 +34,11 @@ class EdgeOdometer:
 
     spacing_m: float = 0.5
     max_step_m: float = 0.3  # a longer step is not onto this edge (another pair of walls)
-    _last: Point | None = None  # the last point of the chain
-    _length: float = 0.0  # of the chain so far
-    _sum: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])  # pending: x, y, count
-    _sum_from_m: float = 0.0  # encoder distance where the pending average began
+    _last: Point | None = field(default=None, init=False)  # the last point of the chain
+    _length: float = field(default=0.0, init=False)  # of the chain so far
+    # The pending average: sum of x, sum of y, count; and the encoder distance it began at.
+    _sum: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0], init=False)
+    _sum_from_m: float = field(default=0.0, init=False)
 
     def start(self, x_m: float, y_m: float) -> None:
         """A node at ``(x, y)`` (odometry frame): an edge begins here."""
@@ -63,14 +64,18 @@ class EdgeOdometer:
         """The edge's length if it ends at ``(x, y)`` now; None if no edge was started."""
         if self._last is None:
             return None
-        self._close()
-        assert self._last is not None
-        return self._length + math.dist(self._last, (x_m, y_m))
+        pending = self._pending()
+        if pending is None:
+            return self._length + math.dist(self._last, (x_m, y_m))
+        return self._length + math.dist(self._last, pending) + math.dist(pending, (x_m, y_m))
+
+    def _pending(self) -> Point | None:
+        acc = self._sum
+        return (acc[0] / acc[2], acc[1] / acc[2]) if acc[2] > 0.0 else None
 
     def _close(self) -> None:
-        acc = self._sum
-        if acc[2] > 0.0 and self._last is not None:
-            p = (acc[0] / acc[2], acc[1] / acc[2])
+        p = self._pending()
+        if p is not None and self._last is not None:
             self._length += math.dist(self._last, p)
             self._last = p
         self._sum = [0.0, 0.0, 0.0]
