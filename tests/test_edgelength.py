@@ -13,7 +13,9 @@ import math
 import numpy as np
 import pytest
 
-from tslam.core.edgelength import EdgeOdometer, step_onto_edge
+from tslam.core.edgelength import EdgeOdometer
+from tslam.core.laws import step_onto_edge
+from tslam.core.sensing import Obstacle
 from tslam.programs.cli import main
 
 
@@ -92,9 +94,12 @@ def test_no_length_before_a_node():
 
 def test_the_step_onto_a_corridor_centre():
     # Walls at y = +1 and y = -1, the robot at y = 0.1: the upper wall is the closer.
-    step = step_onto_edge(0.9, (0.0, -1.0), 1.1, (0.0, 1.0))
+    upper = Obstacle(0.9, 0.0, 0.9, 0.0, -1.0, math.pi / 2)
+    lower = Obstacle(1.1, 0.0, -1.1, 0.0, 1.0, -math.pi / 2)
+    step = step_onto_edge(upper, lower)
     assert step == pytest.approx((0.0, -0.1))
-    assert step_onto_edge(0.9, (0.0, -1.0), 1.1, (0.0, -1.0)) is None
+    same_side = Obstacle(1.1, 0.0, 1.1, 0.0, -1.0, math.pi / 2)
+    assert step_onto_edge(upper, same_side) is None
 
 
 def test_traced_edges_measure_within_three_percent(tmp_path, capsys):

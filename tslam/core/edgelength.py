@@ -7,11 +7,11 @@ it. The encoders' distance over such a path overstated fig12's edges by 4-6 % at
 and by up to 19 % (`tslam trace --world fig12 --edges 12`, seeds 1-3, drift `paper`).
 
 While tracing, the sonar says where the edge is: ``G = d1 - d2`` and its gradient give the
-step that would take the robot onto it (``-pinv(grad G) G``, the term the trace law steers
-by). The dead-reckoned position plus that step is a point of the edge. Those points are
-averaged over ``spacing_m`` of travel (each step is as noisy as two sonar distances) and
-joined by straight chords, from the node the edge left to where it ends. Dead reckoning is
-trusted over one edge only, as the paper trusts translation.
+step that would take the robot onto it (``-pinv(grad G) G``, ``laws.step_onto_edge``, the
+term the trace law steers by). The dead-reckoned position plus that step is a point of the
+edge. Those points are averaged over ``spacing_m`` of travel (each step is as noisy as two
+sonar distances) and joined by straight chords, from the node the edge left to where it
+ends. Dead reckoning is trusted over one edge only, as the paper trusts translation.
 
 Off the edge (departing, homing, re-accessing, backing off a contact) no point is taken, so
 a detour is bridged by a chord between the edge points either side of it. (An average that
@@ -79,14 +79,3 @@ class EdgeOdometer:
             self._length += math.dist(self._last, p)
             self._last = p
         self._sum = [0.0, 0.0, 0.0]
-
-
-def step_onto_edge(d1: float, g1: Point, d2: float, g2: Point) -> Point | None:
-    """The step (robot frame) to the nearest point where ``d1 = d2``, to first order:
-    ``-pinv(grad G) G`` with ``grad G = g1 - g2``; None where the two gradients coincide."""
-    gx, gy = g1[0] - g2[0], g1[1] - g2[1]
-    n2 = gx * gx + gy * gy
-    if n2 < 1e-6:
-        return None
-    g = d1 - d2
-    return -g * gx / n2, -g * gy / n2

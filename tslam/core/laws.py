@@ -62,17 +62,26 @@ def trace_velocity(
     the two obstacles give no edge. The correction is capped at ``max_correction`` m/s.
     """
     t = edge_tangent(o1, o2, previous)
-    if t is None:
+    pull = step_onto_edge(o1, o2, beta)
+    if t is None or pull is None:
         return None
-    gx, gy = o1.gx - o2.gx, o1.gy - o2.gy
-    n2 = gx * gx + gy * gy
-    g = o1.distance_m - o2.distance_m
-    # The sign: moving along -grad G lowers G, i.e. brings the robot back to d1 = d2.
-    cx, cy = -beta * g * gx / n2, -beta * g * gy / n2
+    cx, cy = pull
     c = math.hypot(cx, cy)
     if c > max_correction:  # far off the edge, steer back but do not race
         cx, cy = cx * max_correction / c, cy * max_correction / c
     return (alpha * t[0] + cx, alpha * t[1] + cy), t
+
+
+def step_onto_edge(o1: Obstacle, o2: Obstacle, gain: float = 1.0) -> Vec | None:
+    """``-gain pinv(grad G) G`` with ``G = d1 - d2``: with gain 1, the step onto the edge of
+    ``o1`` and ``o2`` to first order (moving along -grad G lowers G); with ``beta``, eq. (1)'s
+    pull back onto it. None where the two gradients coincide."""
+    gx, gy = o1.gx - o2.gx, o1.gy - o2.gy
+    n2 = gx * gx + gy * gy
+    if n2 < 1e-12:  # as edge_tangent: |grad G| below 1e-6
+        return None
+    g = o1.distance_m - o2.distance_m
+    return -gain * g * gx / n2, -gain * g * gy / n2
 
 
 def circumcentre(a: Obstacle, b: Obstacle, c: Obstacle) -> Vec | None:

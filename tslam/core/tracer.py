@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from hal.interfaces import DriveLimits
 from hal.types import DriveStatus, Odometry, SonarScan, Twist
 from tslam.core import laws
-from tslam.core.edgelength import EdgeOdometer, step_onto_edge
+from tslam.core.edgelength import EdgeOdometer
 from tslam.core.sensing import Obstacle, RingSensor
 from tslam.core.sweep import Sweep
 
@@ -269,8 +269,7 @@ class Tracer:
             return s.last_twist
         v, t = out
         s.tangent = _to_odom(t, odo)
-        o1, o2 = obs[0], obs[1]
-        step = step_onto_edge(o1.distance_m, (o1.gx, o1.gy), o2.distance_m, (o2.gx, o2.gy))
+        step = laws.step_onto_edge(obs[0], obs[1])
         if step is not None:
             s.odometer.on_edge(odo.x_m, odo.y_m, odo.distance_m, _to_odom(step, odo))
         if not s.trail or odo.distance_m - s.trail[-1][0] >= 0.02:
