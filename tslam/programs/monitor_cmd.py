@@ -19,10 +19,11 @@ import os
 import re
 import signal
 import sys
+import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from typing import TYPE_CHECKING, Any
 
 from tslam.programs.cli import UserError
@@ -154,19 +155,42 @@ def _tidy(message: str) -> str:
     return message
 
 
+#: After Ctrl-C or SIGTERM the monitor closes its zenoh session; should that hang (a session
+#: abandoned while reconnecting to a robot that is gone hangs the process at exit, zenoh notes
+#: pitfalls 1 and 2), the process ends anyway this long after the signal.
+EXIT_GRACE_S = 5.0
+
+
 @contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
+def _sigterm_as_interrupt(forced_code: int) -> Iterator[None]:
     # A monitor stopped by SIGTERM (systemd, a test harness) must close its session like one
     # stopped by Ctrl-C: a zenoh session left open can hang the process at exit.
+    def interrupt(signum: int, frame: Any) -> None:
+        _exit_after(EXIT_GRACE_S, forced_code)
+        raise KeyboardInterrupt
+
     try:
-        old = signal.signal(signal.SIGTERM, signal.default_int_handler)
+        old = [(sig, signal.signal(sig, interrupt)) for sig in (signal.SIGINT, signal.SIGTERM)]
     except ValueError:  # not the main thread (embedded use): leave signals alone
         yield
         return
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, old)
+        for sig, handler in old:
+            signal.signal(sig, handler)
+
+
+def _exit_after(delay_s: float, code: int) -> None:
+    def force() -> None:
+        for stream in (sys.stdout, sys.stderr):
+            with suppress(OSError, ValueError):
+                stream.flush()
+        os._exit(code)
+
+    timer = threading.Timer(delay_s, force)
+    timer.daemon = True
+    timer.start()
 
 
 def _wait_for(
@@ -196,7 +220,8 @@ def _run(args: argparse.Namespace) -> int:
     os.environ.setdefault("RUST_LOG", "off")
     cfg = link_config(args)
     notifier = Notifier()
-    with _sigterm_as_interrupt():
+    live = args.command is None and not args.once
+    with _sigterm_as_interrupt(0 if live else 130):
         try:
             robot = args.robot or _discover(cfg, args.timeout)
         except KeyboardInterrupt:
@@ -218,7 +243,6 @@ def _run(args: argparse.Namespace) -> int:
                 return _follow(args, robot, client, notifier)
             except KeyboardInterrupt:
                 # The user's way to leave a live view, not an error; a one-shot cut short is.
-                live = args.command is None and not args.once
                 return 0 if live else 130
 
 
