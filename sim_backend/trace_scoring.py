@@ -6,7 +6,9 @@ Inputs are plain arrays and records, so the scorer knows nothing of the tracer:
 - ``nodes``: one record per node the robot reported: kind ("meet" | "boundary"), its true
   position at the moment it was reported, the degree it saw, the encoder distance then;
 - ``edges``: one record per edge traversal: the indices of its end nodes in ``nodes`` and the
-  length the robot measured.
+  length the robot measured. A traversal is scored against the true edge its path followed to
+  the end node; one that followed none (it went through a junction without homing there) is
+  counted in ``edges_not_in_ground_truth`` and not scored.
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim_backend.ground_truth import GroundTruthGVG
+
+ARRIVED_M = 0.5  # this close to a node, or to an edge, the robot is at it or on it
 
 
 @dataclass(frozen=True)
@@ -82,17 +86,43 @@ def score_trace(
         u, v = matched.get(e.start), matched.get(e.end)
         if u is None or v is None or u == v:
             continue
-        candidates = [g.length_m for g in gvg.edges if {g.u, g.v} == {u, v}]
-        if not candidates:
-            unmatched += 1  # the robot joined two meet points the ground truth does not
+        # The true edge is the one the robot went along to the end node, not the one joining
+        # the two whose length is closest to what it measured: the robot can also go the long
+        # way, through a junction it did not home onto (scored against the short edge, that
+        # would read as a length error of the tracer's). Only the way up to its first
+        # arrival at the end node counts: tracing on past the node and coming back is an
+        # error of the length, to be scored.
+        d = path[:, 2]
+        way = path[(d >= nodes[e.start].distance_m) & (d <= nodes[e.end].distance_m), :2]
+        start, end = nodes[e.start], nodes[e.end]
+        near = min(ARRIVED_M, 0.4 * math.hypot(end.x - start.x, end.y - start.y))
+        there = np.flatnonzero(np.hypot(way[:, 0] - end.x, way[:, 1] - end.y) <= near)
+        if len(there):
+            way = way[: there[0] + 1]
+        along = [g for g in gvg.edges if {g.u, g.v} == {u, v} and _follows(way, g.points)]
+        if not along:
+            unmatched += 1  # the robot joined two meet points by no single true edge
             continue
-        true_len = min(candidates, key=lambda length: abs(length - e.length_m))
+        true_len = min(along, key=lambda g: abs(g.length_m - e.length_m)).length_m
         rel.append(abs(e.length_m - true_len) / true_len)
     report["meet_to_meet_edges"] = len(rel) + unmatched
     report["edges_not_in_ground_truth"] = unmatched
     report["edge_length_error_max_rel"] = _r(max(rel)) if rel else None
     report["edge_length_error_median_rel"] = _r(float(np.median(rel))) if rel else None
     return report
+
+
+def _follows(way: np.ndarray, polyline: np.ndarray, within_m: float = ARRIVED_M) -> bool:
+    """Whether nine in ten of the points ``way`` lie within ``within_m`` of ``polyline``."""
+    if len(way) == 0:
+        return True  # nothing recorded between the two nodes: no evidence either way
+    a, b = polyline[:-1], polyline[1:]
+    ab = b - a
+    n2 = np.maximum((ab**2).sum(axis=1), 1e-12)
+    t = np.clip(((way[:, None, :] - a[None]) * ab[None]).sum(axis=2) / n2, 0.0, 1.0)
+    nearest = a[None] + t[..., None] * ab[None]
+    d = np.sqrt(((way[:, None, :] - nearest) ** 2).sum(axis=2)).min(axis=1)
+    return float(np.mean(d <= within_m)) >= 0.9
 
 
 def _r(x: float) -> float:
