@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim_backend.ground_truth import GroundTruthGVG
+from sim_backend.world import point_segments_distance
 
 ARRIVED_M = 0.5  # this close to a node, or to an edge, the robot is at it or on it
 
@@ -92,9 +93,9 @@ def score_trace(
         # would read as a length error of the tracer's). Only the way up to its first
         # arrival at the end node counts: tracing on past the node and coming back is an
         # error of the length, to be scored.
-        d = path[:, 2]
-        way = path[(d >= nodes[e.start].distance_m) & (d <= nodes[e.end].distance_m), :2]
         start, end = nodes[e.start], nodes[e.end]
+        d = path[:, 2]
+        way = path[(d >= start.distance_m) & (d <= end.distance_m), :2]
         near = min(ARRIVED_M, 0.4 * math.hypot(end.x - start.x, end.y - start.y))
         there = np.flatnonzero(np.hypot(way[:, 0] - end.x, way[:, 1] - end.y) <= near)
         if len(there):
@@ -116,12 +117,7 @@ def _follows(way: np.ndarray, polyline: np.ndarray, within_m: float = ARRIVED_M)
     """Whether nine in ten of the points ``way`` lie within ``within_m`` of ``polyline``."""
     if len(way) == 0:
         return True  # nothing recorded between the two nodes: no evidence either way
-    a, b = polyline[:-1], polyline[1:]
-    ab = b - a
-    n2 = np.maximum((ab**2).sum(axis=1), 1e-12)
-    t = np.clip(((way[:, None, :] - a[None]) * ab[None]).sum(axis=2) / n2, 0.0, 1.0)
-    nearest = a[None] + t[..., None] * ab[None]
-    d = np.sqrt(((way[:, None, :] - nearest) ** 2).sum(axis=2)).min(axis=1)
+    d = point_segments_distance(way, np.hstack([polyline[:-1], polyline[1:]]))
     return float(np.mean(d <= within_m)) >= 0.9
 
 
