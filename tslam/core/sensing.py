@@ -89,6 +89,9 @@ class SensingParams:
     spike_m: float = 0.4
     merge_rad: float = math.radians(50.0)
     hold_s: float = 1.5  # keep an echo through one silent firing of its transducer
+    # A neighbour's echo held back as a spike confirms nothing (False: it still does, as
+    # before; off until the seed-pinned exploration scenarios are re-pinned).
+    held_no_support: bool = False
 
 
 class RingSensor:
@@ -162,8 +165,16 @@ class RingSensor:
         prev = self._prev_dist
         assert prev is not None
         below = far + self.p.spike_m
+        # A neighbour's echo held back as a spike is no support: two outliers side by side
+        # would otherwise confirm each other (fig12 through the CAN board: a held 0.43 m lie
+        # kept for its 1.5 s let a 0.42 m one beside it through, and the robot turned back
+        # mid-corridor at a "boundary point").
+        support = np.where(self._held, np.inf, far) if self.p.held_no_support else far
         spike = (
-            fresh & (below < prev) & (below < np.roll(far, 1)) & (below < np.roll(far, -1))
+            fresh
+            & (below < prev)
+            & (below < np.roll(support, 1))
+            & (below < np.roll(support, -1))
         )
         # A spike is held once; if the transducer repeats it, it is real: ``prev`` is then the
         # held spike, which a repeat is not far below. A second spike far below the first is

@@ -50,8 +50,13 @@ class Sweep:
         self._bearing: list[float] = []
         self._dist: list[float] = []
 
-    def add(self, scan: SonarScan) -> None:
-        """Take the firings of ``scan`` not seen before (robot frame; the robot is still)."""
+    def add(self, scan: SonarScan, heading_rad: np.ndarray | float = 0.0) -> None:
+        """Take the firings of ``scan`` not seen before. ``heading_rad``: the body's
+        dead-reckoned heading at each firing. The robot stands, but its body may still be
+        turning as the sweep begins (homing swings the synchro drive's wheels about, and
+        they brake at 30 deg/s^2, some 35 degrees from full rate): a bearing in the body's
+        frame would smear each wall over that turn, so bearings are kept in the odometry
+        frame and given back relative to the heading ``obstacles`` is asked at."""
         stamps = scan.stamps_s
         new = stamps >= self.start_s
         if self._last is not None and len(self._last) == len(scan):
@@ -60,8 +65,9 @@ class Sweep:
         r = np.where(np.isnan(scan.ranges_m), np.inf, scan.ranges_m)
         ex = scan.x_m + np.where(np.isfinite(r), r, 0.0) * np.cos(scan.yaw_rad)
         ey = scan.y_m + np.where(np.isfinite(r), r, 0.0) * np.sin(scan.yaw_rad)
+        bearing = scan.yaw_rad + heading_rad
         for i in np.flatnonzero(new):
-            self._bearing.append(float(scan.yaw_rad[i]))
+            self._bearing.append(float(bearing[i]))
             self._dist.append(float(math.hypot(ex[i], ey[i])) if math.isfinite(r[i]) else math.inf)
 
     @property
@@ -70,8 +76,12 @@ class Sweep:
         ring at 60 ms a transducer; dozens on a ring that fires all within 100 ms)."""
         return len(self._dist) / len(self._last) if self._last is not None else 0.0
 
-    def obstacles(self, merge_rad: float = BENT_WALL_MERGE_RAD) -> list[Obstacle]:
-            return sweep_minima(np.asarray(self._bearing), np.asarray(self._dist), merge_rad)
+    def obstacles(
+        self, heading_rad: float = 0.0, merge_rad: float = BENT_WALL_MERGE_RAD
+    ) -> list[Obstacle]:
+        """The obstacles seen, in the frame of a robot heading ``heading_rad``."""
+        bearing = np.asarray(self._bearing) - heading_rad
+        return sweep_minima(bearing, np.asarray(self._dist), merge_rad)
 
 
 def sweep_minima(
