@@ -61,8 +61,8 @@ COMPOSED = "nomad200+can-sonar-emulated"
 #: run the drive sets it to a transducer every 4 ms (a ring in 64 ms), so a reading the board
 #: sends is never older than one update, as on the real board. (Its bytes are not read: the
 #: scan comes from the board.) In process the explorer copes with a ring fired this fast
-#: (``tests/test_fast_ring.py``); the composed run does not map fig12 right yet
-#: (``tests/test_e2e_nomad200.py``).
+#: (``tests/test_fast_ring.py``), and the composed run maps fig12 as the in-process one does,
+#: as often (``tests/test_e2e_nomad200.py``).
 CAN_BOARD_SONAR_RATE = 1
 #: Host seconds the ring may wait for the board after a step before the run fails.
 REFRESH_TIMEOUT_S = 5.0
