@@ -1,6 +1,5 @@
-"""The tracer's switches found through the CAN board's fast ring (off by default until the
-seed-pinned exploration scenarios are re-pinned): each does what it says on a case built by
-hand, and fails it when off."""
+"""Two of the tracer's switches found through the CAN board's fast ring (off by default:
+TracerParams says why): each does what it says on a case built by hand, and not when off."""
 
 from __future__ import annotations
 

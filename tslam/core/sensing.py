@@ -90,7 +90,7 @@ class SensingParams:
     merge_rad: float = math.radians(50.0)
     hold_s: float = 1.5  # keep an echo through one silent firing of its transducer
     # A neighbour's echo held back as a spike confirms nothing (False: it still does, as
-    # before; off until the seed-pinned exploration scenarios are re-pinned).
+    # before; TracerParams says why this and the tracer's switches are off by default).
     held_no_support: bool = False
 
 
