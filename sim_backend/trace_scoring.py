@@ -22,6 +22,7 @@ from sim_backend.ground_truth import GroundTruthGVG
 from sim_backend.world import point_segments_distance
 
 ARRIVED_M = 0.5  # this close to a node, or to an edge, the robot is at it or on it
+PASS_M = 0.25  # a robot this close to a meet point went through it
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,9 @@ def score_trace(
     report["meet_point_error_max_m"] = _r(max(errors)) if errors else None
     report["meet_point_error_median_m"] = _r(float(np.median(errors))) if errors else None
     report["degree_match_ratio"] = _r(degree_ok / len(meets)) if meets else None
+    visits, unhomed = _passes(gvg, path, [nodes[i] for i in meets])
+    report["meet_point_passes"] = visits
+    report["meet_point_passes_unhomed"] = unhomed
 
     rel, unmatched = [], 0
     for e in edges:
@@ -111,6 +115,41 @@ def score_trace(
     report["edge_length_error_max_rel"] = _r(max(rel)) if rel else None
     report["edge_length_error_median_rel"] = _r(float(np.median(rel))) if rel else None
     return report
+
+
+def _passes(
+    gvg: GroundTruthGVG, path: np.ndarray, meets: list[SeenNode], close_m: float = PASS_M
+) -> tuple[int, int]:
+    """How often the robot came within ``close_m`` of a true meet point, and how many of
+    those passes reported no meet point there. A pass is one stay within ``ARRIVED_M`` of
+    the point; one still going on when the run ends is left out (it may be homing yet).
+    Passing a junction without homing is what sends exploration astray, and it happens a
+    few times in a hundred passes: a figure over many passes tests a tracer change where a
+    whole exploration's outcome is a coin flip."""
+    visits = unhomed = 0
+    if len(path) == 0:
+        return 0, 0
+    for g in gvg.nodes:
+        if g.kind != "meet":
+            continue
+        dist = np.hypot(path[:, 0] - g.x, path[:, 1] - g.y)
+        inside = dist <= ARRIVED_M
+        edges = np.flatnonzero(np.diff(inside.astype(np.int8)))
+        starts = list(edges[~inside[edges]] + 1)
+        ends = list(edges[inside[edges]] + 1)
+        if inside[0]:
+            starts.insert(0, 0)
+        for a, b in zip(starts, ends, strict=False):  # an unfinished stay has no end
+            if dist[a:b].min() > close_m:
+                continue
+            visits += 1
+            lo, hi = path[a, 2], path[b - 1, 2]
+            homed = any(
+                lo <= n.distance_m <= hi and math.hypot(n.x - g.x, n.y - g.y) <= ARRIVED_M
+                for n in meets
+            )
+            unhomed += int(not homed)
+    return visits, unhomed
 
 
 def _follows(way: np.ndarray, polyline: np.ndarray, within_m: float = ARRIVED_M) -> bool:

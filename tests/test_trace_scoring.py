@@ -72,3 +72,24 @@ def test_tracing_on_past_the_end_node_and_back_is_a_length_error_to_score():
     report = score_trace(gvg, path, nodes, [SeenEdge(0, 1, total)])
     assert report["edges_not_in_ground_truth"] == 0
     assert report["edge_length_error_max_rel"] == pytest.approx((total - 0.3) / 0.3, abs=1e-4)
+
+
+def test_a_meet_point_gone_through_without_homing_is_a_pass_unhomed():
+    gvg = triangle()
+    # From A to C, on 1 m past C (so the stay at C ends), and back to C where it homes.
+    beyond = (C[0], C[1] + 1.0)
+    path = drive([A, C, beyond, C, (C[0], C[1] + 0.6)])
+    at_c_again = float(path[np.flatnonzero(path[:, 1] >= beyond[1])[0], 2]) + 1.0
+    nodes = [SeenNode("meet", *A, 3, 0.0), SeenNode("meet", *C, 3, at_c_again)]
+    report = score_trace(gvg, path, nodes, [])
+    # A: the run starts there and A was reported: homed. C: passed once without a report,
+    # once with one. The pass of B 0.3 m away from A's stay is not within 0.25 m of it.
+    assert report["meet_point_passes"] == 3
+    assert report["meet_point_passes_unhomed"] == 1
+
+
+def test_a_stay_unfinished_when_the_run_ends_is_not_scored():
+    gvg = triangle()
+    path = drive([A, (0.15, 1.0), C])  # ends on C: it may be homing yet
+    report = score_trace(gvg, path, [SeenNode("meet", *A, 3, 0.0)], [])
+    assert report["meet_point_passes"] == 1 and report["meet_point_passes_unhomed"] == 0
