@@ -129,9 +129,7 @@ def _passes(
     visits = unhomed = 0
     if len(path) == 0:
         return 0, 0
-    for g in gvg.nodes:
-        if g.kind != "meet":
-            continue
+    for g in gvg.meet_points:
         dist = np.hypot(path[:, 0] - g.x, path[:, 1] - g.y)
         inside = dist <= ARRIVED_M
         edges = np.flatnonzero(np.diff(inside.astype(np.int8)))

@@ -57,7 +57,7 @@ class TracerParams:
     sweep_radps: float = math.radians(22.5) / 3.9
     home_gain: float = 1.0
     home_max_mps: float = 0.15
-    # The five switches below (with SensingParams.held_no_support) each fix a failure found
+    # Five switches, the four below and SensingParams.held_no_support, each fix a failure found
     # in the composed run through both emulators, fig12 seed 6 without drift, which with all
     # five on maps fig12 whole (7 duplicate nodes without). They are off by default: they
     # move the robot differently elsewhere, which re-rolls the seeds the exploration scenario
@@ -73,8 +73,9 @@ class TracerParams:
     # The sweep's bearings in the odometry frame, so a body still turning as it starts does
     # not smear them (False: the body's frame, as if it stood still).
     sweep_fixed_frame: bool = False
-    # On a fast ring, a point the sweep rejected is not homed onto again, is traced through
-    # on the pair of obstacles that goes on the way the robot came, by its course.
+    # On a fast ring, a point the sweep rejected is not homed onto again and is traced through
+    # on the pair of obstacles whose edge goes on the robot's course; on any ring, the robot
+    # leaves a rejected point the way it came in.
     rejected_memory: bool = False
     sensing: SensingParams = field(default_factory=SensingParams)
     boundary_clearance_m: float = 0.45  # the edge has run into its corner
@@ -289,7 +290,7 @@ class Tracer:
         # not the last cycle's tangent alone. One cycle with a false echo nearest (a
         # diffracted corner, a side lobe) pairs the wrong two obstacles, and a tangent that
         # swung round with them once stayed round: the robot went back the way it came.
-        along = (s.rejected and p.rejected_memory) or p.course_sign
+        along = self._past_rejected or p.course_sign
         course = self._came_along(odo, s.tangent) if s.tangent and along else s.tangent
         prev = _to_robot(course, odo) if course else None
         o1, o2 = self._pair(obs, odo, prev)
@@ -316,7 +317,7 @@ class Tracer:
         follows the pair whose edge goes on the way it was going."""
         s, p = self.s, self.p
         if (
-            not (s.rejected and p.rejected_memory)
+            not self._past_rejected
             or s.last_meet is None
             or prev is None
             or not laws.equidistant(obs, 3, p.arm_tol_m)
@@ -327,9 +328,15 @@ class Tracer:
         best, pair = -2.0, (obs[0], obs[1])
         for i, j in ((0, 1), (0, 2), (1, 2)):
             t = laws.edge_tangent(obs[i], obs[j], prev)
-            if t is not None and t[0] * prev[0] + t[1] * prev[1] > best:
-                best, pair = t[0] * prev[0] + t[1] * prev[1], (obs[i], obs[j])
+            along = -2.0 if t is None else t[0] * prev[0] + t[1] * prev[1]
+            if along > best:
+                best, pair = along, (obs[i], obs[j])
         return pair
+
+    @property
+    def _past_rejected(self) -> bool:
+        """The last sweep rejected its point on a fast ring, and ``rejected_memory`` is on."""
+        return self.s.rejected and self.p.rejected_memory
 
     def _meet_near(self, obs: list[Obstacle], odo: Odometry) -> bool:
         s, p = self.s, self.p
@@ -339,7 +346,7 @@ class Tracer:
         if c is None or math.hypot(*c) > p.meet_radius_m:
             return False
         cx, cy = _to_odom(c, odo)
-        if s.rejected and p.rejected_memory and s.last_meet is not None:
+        if self._past_rejected and s.last_meet is not None:
             # Re-arming is not enough on a fast ring: one cycle in which the third echo drops
             # out arms detection again, and the robot homed back onto the point its sweep had
             # just rejected, for minutes (fig12's cut corner through the CAN board).
