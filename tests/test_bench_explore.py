@@ -26,6 +26,7 @@ from tslam.programs.bench_explore import (
 )
 from tslam.programs.cli import UserError, main
 from tslam.programs.sim_cmd import explore, report
+from tslam.programs.trace_cmd import tracer_params
 
 TSLAM = Path(sys.executable).with_name("tslam")
 TINY = ["--worlds", "fig12", "--drifts", "none", "--seeds", "1", "--duration", "120"]
@@ -114,7 +115,8 @@ def test_a_row_equals_the_report_of_the_same_run_in_process(capsys, tmp_path):
     out, err = capsys.readouterr()
     assert code == 0, err
     result = json.loads(out)
-    assert set(result) == {"runs", "summary", "targets"}
+    assert set(result) == {"tracer_switches_on", "runs", "summary", "targets"}
+    assert result["tracer_switches_on"] == []
     [row] = result["runs"]
 
     task = Task("fig12", "none", 1, 120.0)
@@ -127,6 +129,23 @@ def test_a_row_equals_the_report_of_the_same_run_in_process(capsys, tmp_path):
     assert "[1/1] fig12 none s1: " in err
     assert json.loads((tmp_path / "bench_explore.json").read_text()) == result
     assert "fig12" in (tmp_path / "bench_explore.txt").read_text()
+
+
+def test_a_tracer_switch_reaches_the_workers_and_the_result(capsys):
+    code = main(["bench", "explore", "--json", *TINY, "--jobs", "1", "--switch", "centred_meet"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    result = json.loads(out)
+    assert result["tracer_switches_on"] == ["centred_meet"]
+    [row] = result["runs"]
+    task = Task("fig12", "none", 1, 120.0, ("centred_meet",))
+    params = tracer_params(["centred_meet"])
+    run = explore("fig12", 1, "none", 120.0, progress=False, tracer_params=params)
+    here = row_from_report(task, report(run, "fig12", 1, "none"))
+    moves = ("path_over_gvg", "max_odometry_error_m")
+    assert [row[k] for k in moves] == [here[k] for k in moves]
+    plain = explore("fig12", 1, "none", 120.0, progress=False)
+    assert [report(plain, "fig12", 1, "none")[k] for k in moves] != [row[k] for k in moves]
 
 
 def test_a_failing_worker_becomes_an_error_row():

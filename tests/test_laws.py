@@ -69,3 +69,37 @@ def test_to_twist_translates_only_when_facing_the_velocity():
     assert side.v_mps == 0.0 and side.steer_radps > 0
     back = laws.to_twist((-0.2, 0.0), lim, reverse_ok=True)
     assert back.v_mps == pytest.approx(-0.2)
+
+
+def _flat_walls(meet: tuple[float, float], clearance: float, bearings_deg: list[float]):
+    """Obstacles seen from the origin of flat walls ``clearance`` from the point ``meet``,
+    their normals at ``bearings_deg``."""
+    out = []
+    for b in bearings_deg:
+        u = (math.cos(math.radians(b)), math.sin(math.radians(b)))
+        d = clearance + meet[0] * u[0] + meet[1] * u[1]
+        out.append(Obstacle(d, d * u[0], d * u[1], -u[0], -u[1], math.radians(b)))
+    return out
+
+
+def test_the_wall_centre_is_the_meet_point_from_a_few_centimetres_off():
+    # The robot stands 6 cm off a meet point of three flat walls.
+    obs = _flat_walls((0.05, -0.03), 1.25, [90.0, 210.0, 330.0])
+    c = laws.wall_centre(*obs)
+    assert c == pytest.approx((0.05, -0.03), abs=1e-9)
+    assert laws.seen_from(obs, c) == pytest.approx([1.25, 1.25, 1.25])
+    # 36 cm off, the circle through the three closest points is centred 2 cm from it.
+    far = _flat_walls((0.3, -0.2), 1.25, [90.0, 210.0, 330.0])
+    assert laws.wall_centre(*far) == pytest.approx((0.3, -0.2), abs=1e-9)
+    assert math.dist(laws.circumcentre(*far), (0.3, -0.2)) > 0.015
+    # Seen from where the robot stands, the three spread by twice its offset or so.
+    spread = max(o.distance_m for o in obs) - min(o.distance_m for o in obs)
+    assert spread > 0.08
+
+
+def test_two_parallel_walls_and_a_third_have_a_centre_but_three_parallel_none():
+    assert laws.wall_centre(*_flat_walls((0.0, 0.0), 1.0, [90.0, 270.0, 0.0])) == pytest.approx(
+        (0.0, 0.0), abs=1e-9
+    )
+    walls = _flat_walls((0.0, 0.0), 1.0, [90.0, 270.0, 90.0])
+    assert laws.wall_centre(*walls) is None

@@ -14,7 +14,7 @@ from sim_backend.backend import SimBackend
 from sim_backend.builtin_worlds import builtin_world
 from sim_backend.ground_truth import compute_gvg
 from sim_backend.world import PolygonWorld, StartPose
-from tslam.core.sweep import Sweep, sweep_minima
+from tslam.core.sweep import WIDE_BEND_MERGE_RAD, Sweep, sweep_minima
 from tslam.core.tracer import MeetPointReached, Tracer
 
 
@@ -183,3 +183,38 @@ def test_the_tracer_finds_no_meet_point_at_fig12s_cut_corner():
             clock.sleep(0.1)
     assert len(true_meets) == 3
     assert len(offs) == 12 and max(offs) < 0.15, offs
+
+
+def test_one_reading_off_a_plateau_does_not_cut_the_wall_out():
+    """fig1's junction (1.25, 9.83): the third wall answered at 249, 254 and 266 degrees, but
+    another transducer at 254 heard the far wall (2.69 m), which cut the run into pieces of
+    one and two readings, too short to count; the sweep saw two obstacles and the meet point
+    was rejected. With ``bridge`` (the tracer's centred_meet) the run reaches over it; a
+    second reading off the plateau in a row still ends it."""
+    b = np.radians([200.0, 230.0, 243.0, 249.0, 254.0, 254.5, 266.0, 276.0, 300.0])
+    d = np.array([np.inf, np.inf, 2.66, 1.29, 1.23, 2.69, 1.28, np.inf, np.inf])
+    assert sweep_minima(b, d) == []
+    obs = sweep_minima(b, d, bridge=True)
+    assert len(obs) == 1
+    assert obs[0].distance_m == pytest.approx(1.28)
+    assert 245.0 < math.degrees(obs[0].bearing_rad) % 360.0 < 270.0
+    d2 = d.copy()
+    d2[6], d2[7] = np.inf, 1.28  # no echo at 266 as well: two off the plateau in a row
+    assert sweep_minima(b, d2, bridge=True) == []
+
+
+def test_a_bend_whose_faces_read_61_degrees_apart_is_one_wall():
+    """fig12's cut corner (a 45-degree bend) read 61 degrees apart from a meet point's
+    sweep, each face's plateau cut short at the bend; the faces are one wall within the
+    wider join of the tracer's centred_meet, and a room's corner still two walls."""
+    b = _ring(5.6)
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 175) & (deg <= 217)] = 1.46
+    d[(deg > 217) & (deg < 230)] = 1.58  # the bend's vertex, a little farther
+    d[(deg >= 230) & (deg <= 282)] = 1.44
+    assert len(sweep_minima(b, d)) == 2
+    assert len(sweep_minima(b, d, WIDE_BEND_MERGE_RAD)) == 1
+    d[(deg >= 175) & (deg <= 217)] = np.inf
+    d[(deg >= 150) & (deg <= 190)] = 1.46  # 90 degrees from the other wall
+    assert len(sweep_minima(b, d, WIDE_BEND_MERGE_RAD)) == 2

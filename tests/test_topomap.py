@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tslam.core.signature import Signature, cyclic_gaps, rotations
-from tslam.core.topomap import TAU, Link, MapError, MapFormatError, Step, TopoMap
+from tslam.core.topomap import TAU, Likeness, Link, MapError, MapFormatError, Step, TopoMap
 from tslam.programs.cli import UserError
 from tslam.programs.map_files import load_map, render_map_svg, save_map, save_map_svg
 
@@ -831,3 +831,45 @@ def test_svg_of_an_empty_map_and_a_bad_layout():
     assert by_class(root, "map-meet") == []
     with pytest.raises(ValueError, match="layout must be one of"):
         render_map_svg(TopoMap(), layout="geographic")
+
+
+LIKE = Likeness(clearance_m=0.15, angle_rad=math.radians(25.0), length_abs_m=0.25, length_rel=0.08)
+
+
+def test_a_merge_that_zips_edges_of_other_lengths_raises_when_told_to_compare():
+    """Kind and degree alone let a proven pair carry the merge on, edge by edge, to places
+    that only have the degree in common; compared as a prediction is, the edges differ."""
+    m = TopoMap()
+    n1, p1 = corner(m, 0)
+    n2, p2 = corner(m, 1)
+    m.connect(n1, p1["next"], n2, p2["prev"], 4.0)
+    n5, p5 = corner(m, 0, drift=0.3)
+    n6, p6 = corner(m, 1, drift=0.3)
+    m.connect(n5, p5["next"], n6, p6["prev"], 2.5)  # 1.5 m shorter than the edge it would be
+    k = (p1["next"] - p5["next"]) % 3
+    snapshot = m.to_dict()
+    with pytest.raises(MapError, match=r"edge \d+ \(2\.50 m\) edge \d+ \(4\.00 m\)"):
+        m.merge(n1, n5, k, LIKE)
+    assert m.to_dict() == snapshot
+    assert m.merge(n1, n5, k).nodes == {n5: (n1, k), n6: (n2, (p2["prev"] - p6["prev"]) % 3)}
+
+
+def test_a_merge_that_zips_onto_a_node_that_looks_otherwise_raises_when_told_to_compare():
+    m = TopoMap()
+    n1, p1 = corner(m, 0)
+    n2, p2 = corner(m, 1)
+    m.connect(n1, p1["next"], n2, p2["prev"], 4.0)
+    n5, p5 = corner(m, 0, drift=0.3)
+    n6, p6 = corner(m, 1, drift=0.3, clearance=1.6)  # 0.6 m wider than node 2
+    m.connect(n5, p5["next"], n6, p6["prev"], 4.0)
+    k = (p1["next"] - p5["next"]) % 3
+    with pytest.raises(MapError, match=rf"node {n6} the same place as node {n2}, which looks"):
+        m.merge(n1, n5, k, LIKE)
+    m2 = TopoMap()
+    a, pa = corner(m2, 0)
+    b, pb = corner(m2, 1)
+    m2.connect(a, pa["next"], b, pb["prev"], 4.0)
+    c, pc = corner(m2, 0, drift=0.3)
+    d, pd = corner(m2, 1, drift=0.3, clearance=1.05)
+    m2.connect(c, pc["next"], d, pd["prev"], 4.2)
+    assert set(m2.merge(a, c, (pa["next"] - pc["next"]) % 3, LIKE).nodes) == {c, d}

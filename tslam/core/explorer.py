@@ -58,7 +58,7 @@ from tslam.core.localize import (
 from tslam.core.placements import other_placements
 from tslam.core.portmap import PortMap, match_by_angle
 from tslam.core.signature import Signature
-from tslam.core.topomap import MapError, Step, TopoMap
+from tslam.core.topomap import Likeness, MapError, Step, TopoMap
 from tslam.core.tracer import (
     Behaviour,
     BoundaryReached,
@@ -838,7 +838,7 @@ class Explorer:
                 # of c2: so port i of x2 is port (i - s + k + s2) of c2.
                 rot = (k + s2 - s) % self.map.node(c2).degree
                 truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
-                plan = self.map.merge(c2, x2, rot)
+                plan = self.map.merge(c2, x2, rot, self._likeness())
                 pairs.extend((d, r, truth[d], truth[r]) for d, (r, _) in plan.nodes.items())
                 for d, (r, sh) in plan.nodes.items():
                     for old, (cur, s0) in list(renamed.items()):
@@ -1045,6 +1045,11 @@ class Explorer:
     def _add_boundary(self, ev: BoundaryReached) -> int:
         truth = self.truth() if self.truth else None
         return self.map.add_boundary(ev.clearance_m, (ev.x_m, ev.y_m), truth=truth)
+
+    def _likeness(self) -> Likeness:
+        """What every pair a merge makes one must agree on: what a prediction is tested on."""
+        t = self._tol()
+        return Likeness(t.clearance_m, t.angle_rad, t.length_abs_m, t.length_rel)
 
     def _tol(self) -> Tolerances:
         return replace(self.p.tol, at_least=True) if self.disturbed else self.p.tol

@@ -153,3 +153,27 @@ def steer_rate(err: float, limits: DriveLimits, gain: float = 1.5) -> float:
 
 def _clamp(x: float, lim: float) -> float:
     return max(-lim, min(lim, x))
+
+
+def seen_from(obstacles: Sequence[Obstacle], c: Vec) -> list[float]:
+    """Each obstacle's distance from the point ``c`` (robot frame), to first order: its
+    closest point slides along the wall as the viewpoint moves, so the distance changes by
+    the step's component along the gradient (exact for a flat wall)."""
+    return [o.distance_m + o.gx * c[0] + o.gy * c[1] for o in obstacles]
+
+
+def wall_centre(a: Obstacle, b: Obstacle, c: Obstacle) -> Vec | None:
+    """The point equidistant to the three obstacles to first order (``seen_from``): where
+    their meet point is, from a robot standing off it: its distances to the three then
+    spread by up to twice the offset, and the circle through the three closest points is
+    centred off the meet point where a closest point has slid along its wall (2 cm at 36 cm
+    off). None if the three gradients leave no such point (three parallel walls)."""
+    rows = [(o.gx, o.gy, o.distance_m) for o in (a, b, c)]
+    # d_i + g_i . x = r for i = 1..3: subtract the first to eliminate r.
+    (g0x, g0y, d0), (g1x, g1y, d1), (g2x, g2y, d2) = rows
+    m11, m12, r1 = g1x - g0x, g1y - g0y, d0 - d1
+    m21, m22, r2 = g2x - g0x, g2y - g0y, d0 - d2
+    det = m11 * m22 - m12 * m21
+    if abs(det) < 1e-6:
+        return None
+    return (r1 * m22 - m12 * r2) / det, (m11 * r2 - m21 * r1) / det

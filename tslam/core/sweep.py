@@ -36,6 +36,11 @@ from tslam.core.sensing import Obstacle
 #: bearings are good to about 5 degrees each, so it joins up to 60 lest a 45-degree bend
 #: (fig12's cut corner) show as a meet point from some headings.
 BENT_WALL_MERGE_RAD = math.radians(60.0)
+#: But each face of a concave bend answers only on its own side of the bend, so its plateau
+#: is cut short there and its middle lies some degrees away from the bend: fig12's cut
+#: corner read 61 degrees apart and was taken for a meet point. With the tracer's
+#: ``centred_meet`` the sweep joins up to 70.
+WIDE_BEND_MERGE_RAD = math.radians(70.0)
 #: The narrowest view past a bend that makes its two faces two obstacles: two readings of a
 #: Nomad ring's sweep. One outlier between a cut corner's faces made fig12's a meet point.
 MIN_VIEW_RAD = math.radians(8.0)
@@ -77,11 +82,14 @@ class Sweep:
         return len(self._dist) / len(self._last) if self._last is not None else 0.0
 
     def obstacles(
-        self, heading_rad: float = 0.0, merge_rad: float = BENT_WALL_MERGE_RAD
+        self,
+        heading_rad: float = 0.0,
+        merge_rad: float = BENT_WALL_MERGE_RAD,
+        bridge: bool = False,
     ) -> list[Obstacle]:
         """The obstacles seen, in the frame of a robot heading ``heading_rad``."""
         bearing = np.asarray(self._bearing) - heading_rad
-        return sweep_minima(bearing, np.asarray(self._dist), merge_rad)
+        return sweep_minima(bearing, np.asarray(self._dist), merge_rad, bridge=bridge)
 
 
 def sweep_minima(
@@ -93,12 +101,16 @@ def sweep_minima(
     bend_ratio: float = 1.25,
     min_samples: int = 3,
     min_run_rad: float = math.radians(8.0),
+    bridge: bool = False,
 ) -> list[Obstacle]:
     """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
 
     A reading within ``tol_m + tol_rel * d`` of a run's lowest reading ``d`` belongs to the
     run (the sonar's noise is about 1 cm + 1 %, so this is some three deviations); runs
-    are grown from the lowest reading up.
+    are grown from the lowest reading up. With ``bridge`` a run reaches over one reading off
+    its plateau to the next one on it: a dropout, or another transducer's echo from a side
+    lobe or the far wall at the same bearing, cuts a wall's run into pieces too short to
+    count otherwise, and a junction's third wall goes unseen.
     """
     n = len(bearing_rad)
     if n < 3:
@@ -125,6 +137,9 @@ def sweep_minima(
                 slope = True
                 break
             if d[k] > limit:
+                if bridge and _on_plateau(d, claimed, (k + 1) % n, limit, hi - lo + 2 < n):
+                    hi += 2
+                    continue
                 break
             hi += 1
         while hi - lo + 1 < n:
@@ -133,11 +148,15 @@ def sweep_minima(
                 slope = True
                 break
             if d[k] > limit:
+                if bridge and _on_plateau(d, claimed, (k - 1) % n, limit, hi - lo + 2 < n):
+                    lo -= 2
+                    continue
                 break
             lo -= 1
         idx = np.array([k % n for k in range(lo, hi + 1)])
+        member = idx[d[idx] <= limit]
         claimed[idx] = run_id
-        if slope or len(idx) == n or len(idx) < fewest:
+        if slope or len(idx) == n or len(member) < fewest:
             # A real wall or corner answers over the whole beam: several samples of a sweep,
             # over some 25 degrees of axis. A run of one or two is a stray echo, and so is a
             # side lobe's run on a ring that fires fast: it answers half its firings at
@@ -147,7 +166,7 @@ def sweep_minima(
         first, last = b[idx[0]], b[idx[-1]]
         span = (last - first) % (2 * math.pi)
         mid = first + 0.5 * span
-        runs.append((float(np.median(d[idx])), mid, lo % n, hi % n))
+        runs.append((float(np.median(d[member])), mid, lo % n, hi % n))
     if not runs:
         return []
     # Neighbouring runs on one bent wall join, in chains (a side-lobe fragment, the wall,
@@ -176,6 +195,11 @@ def sweep_minima(
         ux, uy = math.cos(mid), math.sin(mid)
         out.append(Obstacle(dist, ux * dist, uy * dist, -ux, -uy, math.atan2(uy, ux)))
     return out
+
+
+def _on_plateau(d: np.ndarray, claimed: np.ndarray, k: int, limit: float, room: bool) -> bool:
+    """Whether reading ``k``, just past one off the plateau, is on it again."""
+    return room and claimed[k] < 0 and d[k] <= limit
 
 
 def _one_wall(

@@ -121,6 +121,23 @@ class Change:
 
 
 @dataclass(frozen=True)
+class Likeness:
+    """How alike two nodes or two edges must be for a merge to make them one. A merge
+    identifies more than the pair it was asked for: every edge the two share a port with is
+    one edge, so its far ends are one node, and so on. Kind and degree alone let a port read
+    wrongly once carry a proven merge on to a place that only has the same degree (fig13: a
+    junction's edge to one room zipped onto its edge to the next, 3.4 m apart)."""
+
+    clearance_m: float
+    angle_rad: float
+    length_abs_m: float
+    length_rel: float
+
+    def lengths_agree(self, a: float, b: float) -> bool:
+        return abs(a - b) <= self.length_abs_m + self.length_rel * max(a, b)
+
+
+@dataclass(frozen=True)
 class MergePlan:
     """What a merge would do. ``nodes``: dropped node -> (kept node, shift of its ports);
     ``edges``: dropped edge -> the edge it turned out to be."""
@@ -392,9 +409,13 @@ class TopoMap:
 
     # -- merging ----------------------------------------------------------------------------
 
-    def plan_merge(self, keep: int, drop: int, rotation: int) -> MergePlan:
+    def plan_merge(
+        self, keep: int, drop: int, rotation: int, alike: Likeness | None = None
+    ) -> MergePlan:
         """Work out, without changing anything, what ``merge`` would do; raise ``MapError``
-        if the identification contradicts the map. Cheap enough to test a hypothesis."""
+        if the identification contradicts the map: a kind or degree that differs, and with
+        ``alike`` a signature or an edge's length that does. Cheap enough to test a
+        hypothesis."""
         a = self.node(keep)
         self.node(drop)
         if keep == drop:
@@ -419,6 +440,15 @@ class TopoMap:
                     f" the same place as {nx_.kind} {x} (degree {nx_.degree})"
                 )
             rel = (k + sx - sy) % nx_.degree
+            if alike is not None and rx != ry:
+                fits = rotations(
+                    self.signature(ry), self.signature(rx), alike.clearance_m, alike.angle_rad
+                )
+                if rel not in fits:
+                    raise MapError(
+                        f"merging {drop} into {keep} would make node {ry} the same place as "
+                        f"node {rx}, which looks otherwise"
+                    )
             if rx == ry:
                 if rel:
                     raise MapError(
@@ -449,6 +479,12 @@ class TopoMap:
                             " return by the same port"
                         )
                     # e2 is e1, so their far ends are one (node, port) too.
+                    l1, l2 = self._edges[e1].length_m, self._edges[e2].length_m
+                    if alike is not None and not alike.lengths_agree(l1, l2):
+                        raise MapError(
+                            f"merging {drop} into {keep} would make edge {e2} ({l2:.2f} m) "
+                            f"edge {e1} ({l1:.2f} m)"
+                        )
                     o2, q2 = self._edges[e2].other_end(*self._end(e2, end2))
                     learnt |= identify(o1, o2, q1 - q2)
             if not learnt:
@@ -482,11 +518,13 @@ class TopoMap:
                 slots.setdefault((r, (p + s) % self._nodes[r].degree), []).append((e, end))
         return {k: v for k, v in slots.items() if len(v) > 1}
 
-    def merge(self, keep: int, drop: int, rotation: int) -> MergePlan:
+    def merge(
+        self, keep: int, drop: int, rotation: int, alike: Likeness | None = None
+    ) -> MergePlan:
         """Two nodes are one place: port j of ``drop`` is port ``(j + rotation) % degree`` of
         ``keep`` (a shift from ``signature_rotations(drop, keep, ...)``). Everything the
         topology then forces merges too; all or nothing. ``keep`` keeps its pose and frame."""
-        plan = self.plan_merge(keep, drop, rotation)
+        plan = self.plan_merge(keep, drop, rotation, alike)
 
         def mapped(n: int, p: int) -> tuple[int, int]:
             r, s = plan.nodes.get(n, (n, 0))

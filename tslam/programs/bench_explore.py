@@ -67,6 +67,7 @@ class Task(NamedTuple):
     drift: str
     seed: int
     duration_s: float
+    switches: tuple[str, ...] = ()  # the tracer's, turned on (trace_cmd.SWITCHES)
 
 
 @dataclass(frozen=True)
@@ -100,6 +101,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="simulated seconds allowed per run (default: the limit of tslam sim)",
     )  # fmt: skip
     p.add_argument("--out", default=None, help="also write bench_explore.json and .txt here")
+    p.add_argument(
+        "--switch",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="turn on one of the tracer's switches in every run (see tslam trace --help)",
+    )
     p.set_defaults(run=_run)
 
 
@@ -178,8 +186,12 @@ def _seed(text: str) -> int:
 def run_one(task: Task) -> Row:
     """One exploration and its report, reduced to a bench row (runs in a worker process)."""
     from tslam.programs.sim_cmd import explore, report
+    from tslam.programs.trace_cmd import tracer_params
 
-    run = explore(task.world, task.seed, task.drift, task.duration_s, progress=False)
+    tracer = tracer_params(list(task.switches))
+    run = explore(
+        task.world, task.seed, task.drift, task.duration_s, progress=False, tracer_params=tracer
+    )
     return row_from_report(task, report(run, task.world, task.seed, task.drift))
 
 
@@ -359,13 +371,20 @@ def _label(row: Row) -> str:
 # ---------------------------------------------------------------------------------------------
 
 
-def result_of(rows: Sequence[Row]) -> dict[str, Any]:
-    return {"runs": list(rows), "summary": summarize(rows), "targets": targets(rows)}
+def result_of(rows: Sequence[Row], switches: Sequence[str] = ()) -> dict[str, Any]:
+    return {
+        "tracer_switches_on": list(switches),
+        "runs": list(rows),
+        "summary": summarize(rows),
+        "targets": targets(rows),
+    }
 
 
 def render_text(result: dict[str, Any]) -> str:
+    switches = result.get("tracer_switches_on")
     parts = [
-        "T-SLAM vs the naive dead-reckoning baseline (FM = false merges)",
+        "T-SLAM vs the naive dead-reckoning baseline (FM = false merges)"
+        + (f"; tracer switches on: {', '.join(switches)}" if switches else ""),
         "",
         _runs_table(result["runs"]),
         "",
@@ -480,9 +499,12 @@ def _target_lines(results: dict[str, dict[str, Any]]) -> list[str]:
 
 def _run(args: argparse.Namespace) -> int:
     from tslam.programs.output import write_text_atomic
+    from tslam.programs.trace_cmd import tracer_params
 
     sel = parse_selection(args.worlds, args.drifts, args.seeds, args.jobs, args.duration)
-    tasks = sel.tasks()
+    tracer_params(args.switch)  # a bad name is the user's error, before any run starts
+    switches = tuple(sorted(set(args.switch)))
+    tasks = [t._replace(switches=switches) for t in sel.tasks()]
     _say(
         f"bench explore: {len(tasks)} runs ({len(sel.worlds)} worlds x {len(sel.drifts)} drifts "
         f"x {len(sel.seeds)} seeds) on {min(sel.jobs, len(tasks))} workers"
@@ -491,7 +513,7 @@ def _run(args: argparse.Namespace) -> int:
     # Looked up at call time (not bound as a default) so a test can swap the worker.
     rows = collect(tasks, sel.jobs, worker=run_one)
     _say(f"bench explore: done in {time.perf_counter() - started:.1f} s")
-    result = result_of(rows)
+    result = result_of(rows, switches)
     as_json = json.dumps(result, indent=2) + "\n"
     as_text = render_text(result)
     if args.out:

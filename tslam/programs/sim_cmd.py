@@ -24,7 +24,7 @@ from sim_backend.ground_truth import GroundTruthGVG, compute_gvg
 from sim_backend.odometry_model import DRIFT_LEVELS
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.topomap import TopoMap
-from tslam.core.tracer import MeetPointReached
+from tslam.core.tracer import MeetPointReached, TracerParams
 from tslam.programs.cli import UserError
 from tslam.programs.output import write_text_atomic
 from tslam.programs.sim_backends import (
@@ -78,6 +78,7 @@ def explore(
     progress: bool = True,
     backend_choice: BackendChoice | None = None,
     params: ExplorerParams | None = None,
+    tracer_params: TracerParams | None = None,
 ) -> Run:
     """Explore ``world`` until the arbiter says it is done or ``duration_s`` runs out
     (``params``: the arbiter's settings, the defaults if None)."""
@@ -94,7 +95,7 @@ def explore(
         tp = robot.true_pose()
         return (tp.x, tp.y)
 
-    explorer = Explorer(backend.limits, params=params, truth=truth)
+    explorer = Explorer(backend.limits, params=params, tracer_params=tracer_params, truth=truth)
     run = Run(backend, explorer, gvg)
     period = 1.0 / rate_hz
     started = time.perf_counter()

@@ -15,7 +15,14 @@ from sim_backend.backend import SimBackend
 from sim_backend.ground_truth import GroundTruthGVG, compute_gvg
 from sim_backend.odometry_model import DRIFT_LEVELS
 from sim_backend.trace_scoring import SeenEdge, SeenNode, score_trace
-from tslam.core.tracer import BoundaryReached, EdgeTraversed, MeetPointReached, Tracer
+from tslam.core.sensing import SensingParams
+from tslam.core.tracer import (
+    BoundaryReached,
+    EdgeTraversed,
+    MeetPointReached,
+    Tracer,
+    TracerParams,
+)
 from tslam.programs.cli import UserError
 from tslam.programs.output import write_text_atomic
 
@@ -28,8 +35,38 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--drift", choices=DRIFT_LEVELS, default="paper")
     p.add_argument("--rate", type=float, default=10.0, help="control rate in Hz (10)")
     p.add_argument("--max-time", type=float, default=None, help="simulated seconds allowed")
+    p.add_argument(
+        "--switch",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help=f"turn on one of the tracer's switches (off by default): {', '.join(SWITCHES)}",
+    )
     p.add_argument("--out", required=True, help="directory for trace.svg, trace_report.json")
     p.set_defaults(run=_run)
+
+
+#: The tracer's switches (TracerParams, SensingParams), each off by default.
+SWITCHES = (
+    "centred_meet",
+    "course_sign",
+    "rejected_memory",
+    "sweep_fixed_frame",
+    "home_hold",
+    "held_no_support",
+)
+
+
+def tracer_params(switches: list[str]) -> TracerParams:
+    """TracerParams with the named switches on; a UserError names one that is not."""
+    unknown = sorted(set(switches) - set(SWITCHES))
+    if unknown:
+        raise UserError(f"no tracer switch {unknown[0]!r}; the switches: {', '.join(SWITCHES)}")
+    on = set(switches)
+    sensing = SensingParams(held_no_support="held_no_support" in on)
+    flags = {k: True for k in on if k not in ("home_hold", "held_no_support")}
+    hold = {"home_hold_m": 0.15} if "home_hold" in on else {}
+    return TracerParams(sensing=sensing, **flags, **hold)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -37,22 +74,44 @@ def _run(args: argparse.Namespace) -> int:
         raise UserError(f"--edges must be at least 1, got {args.edges}")
     if not 1.0 <= args.rate <= 100.0:
         raise UserError(f"--rate must be between 1 and 100 Hz, got {args.rate}")
+    params = tracer_params(args.switch)
     backend = create_backend(
         {"backend": "sim", "world": args.world, "seed": args.seed, "drift": args.drift}
     )
     assert isinstance(backend, SimBackend)
+    report, path, dr_path, nodes = run_trace(backend, args.edges, args.rate, args.max_time, params)
+    report["seed"] = args.seed
+    report["drift"] = args.drift
+    report["switches_on"] = sorted(set(args.switch))
+    out = Path(args.out)
+    gvg = compute_gvg(backend.world)
+    write_text_atomic(out / "trace_report.json", json.dumps(report, indent=2) + "\n")
+    write_text_atomic(out / "trace.svg", _render(backend, gvg, path, dr_path, nodes))
+    print(json.dumps(report, indent=2))
+    return 0
+
+
+def run_trace(
+    backend: SimBackend,
+    edges_wanted: int,
+    rate_hz: float = 10.0,
+    max_time_s: float | None = None,
+    params: TracerParams | None = None,
+) -> tuple[dict, list, list, list[SeenNode]]:
+    """Trace ``edges_wanted`` edges on ``backend`` and score them: the report, the true and
+    dead-reckoned paths, and the nodes as seen."""
     gvg = compute_gvg(backend.world)
     robot = backend.robot
-    tracer = Tracer(backend.limits)
-    period = 1.0 / args.rate
-    max_time = args.max_time or 120.0 + 60.0 * args.edges
+    tracer = Tracer(backend.limits, params)
+    period = 1.0 / rate_hz
+    max_time = max_time_s or 120.0 + 60.0 * edges_wanted
     path, dr_path = [], []
     nodes: list[SeenNode] = []
     edges: list[SeenEdge] = []
     started = time.perf_counter()
     with backend:
         clock = backend.clock
-        while clock.now() < max_time and len(edges) < args.edges:
+        while clock.now() < max_time and len(edges) < edges_wanted:
             odo = backend.odometry()
             twist, events = tracer.step(backend.scan(), odo, backend.status(), clock.now())
             backend.command(twist)
@@ -74,21 +133,18 @@ def _run(args: argparse.Namespace) -> int:
     wall = time.perf_counter() - started
     report = {
         "world": backend.world.name,
-        "seed": args.seed,
-        "drift": args.drift,
-        "edges_requested": args.edges,
+        "seed": None,
+        "drift": None,
+        "switches_on": [],
+        "edges_requested": edges_wanted,
         "edges_traced": len(edges),
-        "complete": len(edges) >= args.edges,
+        "complete": len(edges) >= edges_wanted,
         "sim_time_s": round(robot.t, 2),
         "wall_time_s": round(wall, 2),
         "collisions": robot.collisions,
         **score_trace(gvg, np.asarray(path, dtype=float).reshape(-1, 3), nodes, edges),
     }
-    out = Path(args.out)
-    write_text_atomic(out / "trace_report.json", json.dumps(report, indent=2) + "\n")
-    write_text_atomic(out / "trace.svg", _render(backend, gvg, path, dr_path, nodes))
-    print(json.dumps(report, indent=2))
-    return 0
+    return report, path, dr_path, nodes
 
 
 def _render(
