@@ -10,7 +10,7 @@ import xml.etree.ElementTree as ET
 
 from hal.registry import create_backend
 from tslam.programs.cli import main
-from tslam.programs.trace_cmd import run_trace, tracer_params
+from tslam.programs.trace_cmd import run_trace
 
 
 def test_trace_homes_onto_the_true_meet_points_with_the_true_degree(tmp_path, capsys):
@@ -53,8 +53,8 @@ def test_centred_meet_homes_onto_more_of_the_junctions_it_passes():
             backend = create_backend(
                 {"backend": "sim", "world": "fig16", "seed": seed, "drift": "paper"}
             )
-            params = tracer_params(["centred_meet"] if on else [])
-            report = run_trace(backend, 12, params=params)[0]
+            report = run_trace(backend, 12, switches=["centred_meet"] if on else []).report
+            assert report["switches_on"] == (["centred_meet"] if on else [])
             assert report["complete"] and report["meet_point_error_max_m"] <= 0.10
             unhomed[on] += report["meet_point_passes_unhomed"]
     assert unhomed[True] * 2 <= unhomed[False], unhomed

@@ -125,8 +125,9 @@ class Likeness:
     """How alike two nodes or two edges must be for a merge to make them one. A merge
     identifies more than the pair it was asked for: every edge the two share a port with is
     one edge, so its far ends are one node, and so on. Kind and degree alone let a port read
-    wrongly once carry a proven merge on to a place that only has the same degree (fig13: a
-    junction's edge to one room zipped onto its edge to the next, 3.4 m apart)."""
+    wrongly once carry a proven merge on to a place that only has the same degree (fig13
+    seed 5 with the tracer's centred_meet: two junctions merged onto places 3.5 m and 6.6 m
+    from them)."""
 
     clearance_m: float
     angle_rad: float

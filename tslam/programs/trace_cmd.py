@@ -6,7 +6,9 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -74,21 +76,26 @@ def _run(args: argparse.Namespace) -> int:
         raise UserError(f"--edges must be at least 1, got {args.edges}")
     if not 1.0 <= args.rate <= 100.0:
         raise UserError(f"--rate must be between 1 and 100 Hz, got {args.rate}")
-    params = tracer_params(args.switch)
+    tracer_params(args.switch)  # a bad name is refused before the world is loaded
     backend = create_backend(
         {"backend": "sim", "world": args.world, "seed": args.seed, "drift": args.drift}
     )
     assert isinstance(backend, SimBackend)
-    report, path, dr_path, nodes = run_trace(backend, args.edges, args.rate, args.max_time, params)
-    report["seed"] = args.seed
-    report["drift"] = args.drift
-    report["switches_on"] = sorted(set(args.switch))
+    run = run_trace(backend, args.edges, args.rate, args.max_time, args.switch)
     out = Path(args.out)
-    gvg = compute_gvg(backend.world)
-    write_text_atomic(out / "trace_report.json", json.dumps(report, indent=2) + "\n")
-    write_text_atomic(out / "trace.svg", _render(backend, gvg, path, dr_path, nodes))
-    print(json.dumps(report, indent=2))
+    write_text_atomic(out / "trace_report.json", json.dumps(run.report, indent=2) + "\n")
+    svg = _render(backend, run.gvg, run.path, run.dr_path, run.nodes)
+    write_text_atomic(out / "trace.svg", svg)
+    print(json.dumps(run.report, indent=2))
     return 0
+
+
+class TraceRun(NamedTuple):
+    report: dict[str, Any]
+    gvg: GroundTruthGVG
+    path: list[tuple[float, float, float]]  # true x, y and the encoder distance
+    dr_path: list[tuple[float, float]]  # dead-reckoned, in the world's frame
+    nodes: list[SeenNode]
 
 
 def run_trace(
@@ -96,13 +103,13 @@ def run_trace(
     edges_wanted: int,
     rate_hz: float = 10.0,
     max_time_s: float | None = None,
-    params: TracerParams | None = None,
-) -> tuple[dict, list, list, list[SeenNode]]:
-    """Trace ``edges_wanted`` edges on ``backend`` and score them: the report, the true and
-    dead-reckoned paths, and the nodes as seen."""
+    switches: Sequence[str] = (),
+) -> TraceRun:
+    """Trace ``edges_wanted`` edges on ``backend``, with the tracer's ``switches`` on, and
+    score them against the ground truth."""
     gvg = compute_gvg(backend.world)
     robot = backend.robot
-    tracer = Tracer(backend.limits, params)
+    tracer = Tracer(backend.limits, tracer_params(list(switches)))
     period = 1.0 / rate_hz
     max_time = max_time_s or 120.0 + 60.0 * edges_wanted
     path, dr_path = [], []
@@ -133,9 +140,9 @@ def run_trace(
     wall = time.perf_counter() - started
     report = {
         "world": backend.world.name,
-        "seed": None,
-        "drift": None,
-        "switches_on": [],
+        "seed": robot.seed,
+        "drift": robot.p.drift,
+        "switches_on": sorted(set(switches)),
         "edges_requested": edges_wanted,
         "edges_traced": len(edges),
         "complete": len(edges) >= edges_wanted,
@@ -144,7 +151,7 @@ def run_trace(
         "collisions": robot.collisions,
         **score_trace(gvg, np.asarray(path, dtype=float).reshape(-1, 3), nodes, edges),
     }
-    return report, path, dr_path, nodes
+    return TraceRun(report, gvg, path, dr_path, nodes)
 
 
 def _render(
