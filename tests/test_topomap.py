@@ -836,17 +836,22 @@ def test_svg_of_an_empty_map_and_a_bad_layout():
 LIKE = Likeness(clearance_m=0.15, angle_rad=math.radians(25.0), length_abs_m=0.25, length_rel=0.08)
 
 
+def two_sightings(length: float, clearance: float = 1.0):
+    """Ring corners 0 and 1 joined by a 4 m edge, then seen again with the heading 0.3 rad
+    off: corner 1 with ``clearance`` and the edge ``length`` long. Returns the map, the four
+    (node, ports) and the rotation that makes the second sighting of corner 0 the first."""
+    m = TopoMap()
+    (n1, p1), (n2, p2) = corner(m, 0), corner(m, 1)
+    m.connect(n1, p1["next"], n2, p2["prev"], 4.0)
+    (n5, p5), (n6, p6) = corner(m, 0, drift=0.3), corner(m, 1, drift=0.3, clearance=clearance)
+    m.connect(n5, p5["next"], n6, p6["prev"], length)
+    return m, (n1, p1), (n2, p2), (n5, p5), (n6, p6), (p1["next"] - p5["next"]) % 3
+
+
 def test_a_merge_that_zips_edges_of_other_lengths_raises_when_told_to_compare():
     """Kind and degree alone let a proven pair carry the merge on, edge by edge, to places
     that only have the degree in common; compared as a prediction is, the edges differ."""
-    m = TopoMap()
-    n1, p1 = corner(m, 0)
-    n2, p2 = corner(m, 1)
-    m.connect(n1, p1["next"], n2, p2["prev"], 4.0)
-    n5, p5 = corner(m, 0, drift=0.3)
-    n6, p6 = corner(m, 1, drift=0.3)
-    m.connect(n5, p5["next"], n6, p6["prev"], 2.5)  # 1.5 m shorter than the edge it would be
-    k = (p1["next"] - p5["next"]) % 3
+    m, (n1, _), (n2, p2), (n5, _), (n6, p6), k = two_sightings(2.5)  # 1.5 m short
     snapshot = m.to_dict()
     with pytest.raises(MapError, match=r"edge \d+ \(2\.50 m\) edge \d+ \(4\.00 m\)"):
         m.merge(n1, n5, k, LIKE)
@@ -855,21 +860,8 @@ def test_a_merge_that_zips_edges_of_other_lengths_raises_when_told_to_compare():
 
 
 def test_a_merge_that_zips_onto_a_node_that_looks_otherwise_raises_when_told_to_compare():
-    m = TopoMap()
-    n1, p1 = corner(m, 0)
-    n2, p2 = corner(m, 1)
-    m.connect(n1, p1["next"], n2, p2["prev"], 4.0)
-    n5, p5 = corner(m, 0, drift=0.3)
-    n6, p6 = corner(m, 1, drift=0.3, clearance=1.6)  # 0.6 m wider than node 2
-    m.connect(n5, p5["next"], n6, p6["prev"], 4.0)
-    k = (p1["next"] - p5["next"]) % 3
+    m, (n1, _), (n2, _), (n5, _), (n6, _), k = two_sightings(4.0, clearance=1.6)  # 0.6 m wider
     with pytest.raises(MapError, match=rf"node {n6} the same place as node {n2}, which looks"):
         m.merge(n1, n5, k, LIKE)
-    m2 = TopoMap()
-    a, pa = corner(m2, 0)
-    b, pb = corner(m2, 1)
-    m2.connect(a, pa["next"], b, pb["prev"], 4.0)
-    c, pc = corner(m2, 0, drift=0.3)
-    d, pd = corner(m2, 1, drift=0.3, clearance=1.05)
-    m2.connect(c, pc["next"], d, pd["prev"], 4.2)
-    assert set(m2.merge(a, c, (pa["next"] - pc["next"]) % 3, LIKE).nodes) == {c, d}
+    m2, (a, _), _, (c, _), (d, _), k2 = two_sightings(4.2, clearance=1.05)
+    assert set(m2.merge(a, c, k2, LIKE).nodes) == {c, d}
