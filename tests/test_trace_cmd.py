@@ -45,7 +45,7 @@ def test_trace_refuses_an_unknown_switch(tmp_path, capsys):
 def test_centred_meet_homes_onto_more_of_the_junctions_it_passes():
     """fig16 at drift paper, seeds 1, 3 and 5: the robot passed true meet points without
     homing 10 times (sweeps rejecting points it stood 1-3 cm off, homing given up on one
-    missing echo); judged at the walls' centre, 3 times."""
+    missing echo); judged at the walls' centre, 4 times."""
     unhomed = {}
     for on in (False, True):
         unhomed[on] = 0
