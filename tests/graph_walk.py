@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 
 from tslam.core.explorer import Explorer
@@ -59,8 +59,12 @@ def walk(
     noise: float = 0.0,
     seed: int = 1,
     misread: Callable[[str, int | None, int], list[float] | None] | None = None,
+    lost_at: Collection[int] = (),
 ) -> list[str]:
     """Run the explorer over ``graph`` from ``start``; returns the true nodes visited.
+
+    ``lost_at``: the arrivals (counted from 0) that come with no arrival index, as when the
+    tracer lost its edge on the way: the explorer is then off the graph.
 
     ``misread(node, true arrival port, visits so far)`` may return other bearings (degrees,
     true frame) for the tracer to report at that arrival: a junction read with an edge more
@@ -83,7 +87,7 @@ def walk(
         # The true port each reported departure leads along (nearest bearing).
         true_port = [_nearest(deps, shown[i]) for i in order]
         arr = None
-        if came_by is not None:
+        if came_by is not None and len(visited) - 1 not in lost_at:
             arr = min(range(len(obs)), key=lambda i: _angdiff(shown[order[i]], deps[came_by]))
         ev = MeetPointReached(
             0.0, x, y, clr + rng.uniform(-noise, noise), len(obs), obs, arr,

@@ -13,7 +13,7 @@ from hal.interfaces import NOMAD200_LIMITS
 from sim_backend.ground_truth import compute_gvg
 from sim_backend.world_files import load_world
 from tests.graph_walk import TrueGraph, from_ground_truth, walk
-from tslam.core.explorer import Explorer
+from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.topomap import TopoMap
 from tslam.core.tracer import MeetPointReached
 
@@ -158,3 +158,53 @@ def test_a_look_alike_whose_edges_do_not_all_match_the_map_is_not_merged():
     walk(graph, ex, starts[1], max_arrivals=400, noise=0.03, seed=1, drift_deg_per_edge=5.0)
     assert false_merges(ex) == 0
     assert sum(n.kind == "meet" for n in ex.map.nodes()) >= len(gvg.meet_points)
+
+
+def test_a_fragment_left_out_of_reach_by_losing_the_way_is_placed_and_the_map_finished():
+    # Lost at arrival 20 while the fragment begun at arrival 13 was still being tested, and
+    # again at 26: the fragment (five nodes) is left unattached, with one departure no path
+    # leads to. Before, the first loss recorded its nodes as ambiguous with their look-alikes
+    # (no move had been found that separates them: there was no move to make), and the map
+    # was never complete: "1 departure(s) unexplored in fragments the robot has not placed
+    # itself in". It fits one place only, so it is merged there, and exploration ends.
+    gvg = compute_gvg(load_world("fig13"))
+    graph = from_ground_truth(gvg)
+    start = next(n for n, v in graph.nodes.items() if v[0] == "meet")
+    runs = {}
+    for place in (True, False):
+        ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(place_orphans=place))
+        walk(graph, ex, start, max_arrivals=200, noise=0.03, seed=2, lost_at=[20, 26])
+        runs[place] = ex
+        assert not [n.text for n in ex.notes if "ambiguous" in n.text]
+        assert false_merges(ex) == 0
+    ex = runs[True]
+    assert any(n.text.endswith("out of reach, fit one place only") for n in ex.notes)
+    assert ex.done and not ex.map.unexplored()
+    assert sum(n.kind == "meet" for n in ex.map.nodes()) == len(gvg.meet_points)
+    # Without placing it, the piece keeps its departure and the map is never complete.
+    assert runs[False].done and runs[False].map.unexplored()
+
+
+def _copies(n: int) -> tuple[TopoMap, list[list[int]]]:
+    """``n`` unconnected copies of one stretch of map: three junctions in a row, 3 m and
+    4 m apart, each with a departure still to explore."""
+    m = TopoMap()
+    out = []
+    for i in range(n):
+        nodes = [m.add_meet(1.2, (0.0, 2.1, 4.2), (10.0 * i + x, 0.0)) for x in (0.0, 3.0, 7.0)]
+        m.connect(nodes[0], 0, nodes[1], 1, 3.0)
+        m.connect(nodes[1], 0, nodes[2], 1, 4.0)
+        out.append(nodes)
+    return m, out
+
+
+@pytest.mark.parametrize("copies, merged", [(2, True), (3, False)])
+def test_a_piece_out_of_reach_is_merged_only_where_it_fits_alone(copies, merged):
+    m, pieces = _copies(copies)
+    ex = Explorer(NOMAD200_LIMITS, tmap=m)
+    before = len(m.nodes())
+    # The robot stands in the first piece; the others no path reaches. With two pieces the
+    # second fits the first only; with three each fits two places, and none is merged.
+    assert ex._place_orphans(pieces[0][0]) is merged
+    assert len(m.nodes()) == (before - 3 if merged else before)
+    assert bool(ex.merges) is merged

@@ -116,3 +116,35 @@ def test_a_second_spike_far_below_a_held_one_is_not_its_confirmation():
     stamps[5] = 0.3
     obs = sensor.update(_scan(second, stamps), Odometry(0.0, 0.0, 0.0, 0.0, 0.3))
     assert obs[0].distance_m == pytest.approx(0.43)  # repeated: it is real
+
+
+def _cut_corner(between: float, far_face: float = 1.38) -> np.ndarray:
+    """A 16-transducer ring near a 45-degree cut corner: one face answers two transducers
+    (a plateau at 11.25 degrees), the other one transducer at 67.5 degrees, 56 degrees
+    apart; ``between`` is the reading at 45 degrees, toward the bend's vertex. A block
+    across the corridor answers at 180 degrees."""
+    r = np.full(16, 3.0)
+    r[15], r[0], r[1], r[2], r[3], r[4] = 1.6, 1.40, 1.40, between, far_face, 1.6
+    r[7], r[8], r[9] = 1.45, 1.3, 1.45
+    return ring_points(r)
+
+
+def test_two_faces_of_a_flat_bend_are_one_obstacle_up_to_the_bend_angle():
+    bend = {"bend_merge_rad": math.radians(60.0)}
+    obs = local_minima(_cut_corner(1.55), **bend)
+    # The vertex reads a little deeper than the faces: one bent wall, the nearer face for it.
+    assert [round(o.distance_m, 2) for o in obs[:2]] == [1.3, 1.38]
+    assert len([o for o in obs if o.distance_m < 2]) == 2
+    # Without the bend rule the ring sees three walls nearly equidistant: a meet point that
+    # the sweep (which joins them) would reject every time.
+    assert len([o for o in local_minima(_cut_corner(1.55)) if o.distance_m < 2]) == 3
+
+
+@pytest.mark.parametrize(
+    "between, far_face",
+    [(2.5, 1.38), (np.nan, 1.38), (1.55, 1.9)],
+    ids=["a view past the faces", "no echo between", "one face much farther"],
+)
+def test_two_minima_are_two_obstacles_unless_they_could_be_one_bend(between, far_face):
+    obs = local_minima(_cut_corner(between, far_face), bend_merge_rad=math.radians(60.0))
+    assert len([o for o in obs if o.distance_m < 2]) == 3
