@@ -841,11 +841,10 @@ class Explorer:
         """The robot no longer knows where it is: the hypotheses about the fragment it was
         in can make no more predictions, so they go, and its nodes stay new places. Where
         the evidence so far fits two places or more, the map says so; but no move was found
-        that could not tell them apart (there was no move to make), so no departure is
-        frozen, and a node with one untested look-alike is not called ambiguous with it.
-        Before, each loss recorded every such node as ambiguous and froze its departures: in
-        the 36-run paper bench 3512 nodes were marked so, 1105 now (fig15's genuine ones
-        among them), with the robot's paths unchanged."""
+        that could tell them apart only because there was no move to make: no departure is
+        frozen, and a node that fits one place is not called ambiguous with it. A frozen
+        departure is never explored, even once its piece of map is merged back
+        (tests/test_explorer_graph.py)."""
         tested = [h for h in self.hyps.live if h.tested]
         for x in sorted(self.hyps.fragment):
             others = {h.mapping[x][0] for h in tested if x in h.mapping}
