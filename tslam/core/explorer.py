@@ -840,10 +840,10 @@ class Explorer:
     def _give_up_hypotheses(self) -> None:
         """The robot no longer knows where it is: the hypotheses about the fragment it was
         in can make no more predictions, so they go, and its nodes stay new places. Where
-        the evidence so far fits two places or more, the map says so; but no move was found
-        that could tell them apart only because there was no move to make: no departure is
-        frozen, and a node that fits one place is not called ambiguous with it. A frozen
-        departure is never explored, even once its piece of map is merged back
+        the evidence so far fits two places or more, the map says so. But no departure is
+        frozen: nothing showed that no move could tell the places apart (there was simply no
+        move left to make). Nor is a node that fits one place only called ambiguous. A
+        frozen departure is never explored, even once its piece of map is merged back
         (tests/test_explorer_graph.py)."""
         tested = [h for h in self.hyps.live if h.tested]
         for x in sorted(self.hyps.fragment):
