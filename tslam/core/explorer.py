@@ -649,7 +649,7 @@ class Explorer:
         """Not knowing where the robot came from, the node goes in unattached and every old
         node that looks like it is a hypothesis to test (``resuming``: against a stored map
         the robot restarted in)."""
-        self._give_up_hypotheses()
+        self._abandon_hypotheses(lost=True)
         node = self._add_meet(ev)
         tol = self.p.tol
         fresh = candidates(self.map, self.map.signature(node), tol, {node}, None)
@@ -671,7 +671,7 @@ class Explorer:
         length = self._edge_length(ev.edge_length_m)
         tol = self._tol()
         if self.leaving is None or self.detoured:
-            self._give_up_hypotheses()
+            self._abandon_hypotheses(lost=True)
             b = self._add_boundary(ev)
             self._leave(b, 0)
             return
@@ -691,7 +691,7 @@ class Explorer:
                 ev, length, True
             ):
                 return
-            self._give_up_hypotheses()
+            self._abandon_hypotheses(lost=True)
             self.plan = []
             b = self._add_boundary(ev)
             self._note(f"expected node {w} after edge {e}, found a boundary: node {b}")
@@ -837,26 +837,17 @@ class Explorer:
                 return True  # the components have changed: the next arrival looks again
         return False
 
-    def _give_up_hypotheses(self) -> None:
-        """The robot no longer knows where it is: the hypotheses about the fragment it was
-        in can make no more predictions, so they go, and its nodes stay new places. Where
-        the evidence so far fits two places or more, the map says so. But no departure is
-        frozen: nothing showed that no move could tell the places apart (there was simply no
-        move left to make). Nor is a node that fits one place only called ambiguous. A
-        frozen departure is never explored, even once its piece of map is merged back
-        (tests/test_explorer_graph.py)."""
-        tested = [h for h in self.hyps.live if h.tested]
-        for x in sorted(self.hyps.fragment):
-            others = {h.mapping[x][0] for h in tested if x in h.mapping}
-            if len(others) > 1 and self.map.has_node(x):
-                self.map.set_ambiguous(x, others)
-                self._note(f"node {x} is ambiguous with {sorted(others)}: not merged")
-        self.hyps.clear()
-
-    def _abandon_hypotheses(self) -> None:
+    def _abandon_hypotheses(self, lost: bool = False) -> None:
         """Nothing can tell the fragment from its look-alikes: keep its nodes as new places,
         say so in the map, and do not re-explore through them what the look-alikes already
-        explored (that would unroll a symmetric building for ever)."""
+        explored (that would unroll a symmetric building for ever).
+
+        ``lost``: the robot no longer knows where it is, so the hypotheses can make no more
+        predictions. The map still says where the evidence so far fits two places or more,
+        but nothing showed that no move could tell them apart (there was simply no move left
+        to make): no departure is frozen, and a node that fits one place only is not called
+        ambiguous. A frozen departure is never explored, even once its piece of map is
+        merged back (tests/test_explorer_graph.py)."""
         # Only hypotheses some prediction has confirmed count: a look-alike whose departures
         # are all unexplored could not be tested yet, which is no ambiguity.
         tested = [h for h in self.hyps.live if h.tested]
@@ -864,11 +855,11 @@ class Explorer:
             if not self.map.has_node(x):
                 continue
             others = {h.mapping[x][0] for h in tested if x in h.mapping}
-            if not others:
+            if len(others) < (2 if lost else 1):
                 continue
             self.map.set_ambiguous(x, others)
             for p, e in enumerate(self.map.node(x).ports):
-                if e is None and all(
+                if not lost and e is None and all(
                     (img := h.image_port(self.map, x, p)) is not None
                     and self.map.node(img[0]).ports[img[1]] is not None
                     for h in tested
