@@ -79,6 +79,7 @@ class FakeRobot:
             current_edge=None, goal_node=self.goal, x=3.0 * (current or 0), y=0.2, theta=0.5,
             hypotheses=["h1"], map_seq=self.seq, map_nodes=len(self.nodes),
             map_edges=len(self.edges), unexplored=sum(n.unexplored for n in self.nodes.values()),
+            event_seq=self.event_seq,
         )  # fmt: skip
 
     def publish(self, kind: str, text: str, change: MapChange | None = None) -> None:

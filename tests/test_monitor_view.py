@@ -7,7 +7,7 @@ import math
 from dataclasses import dataclass, field
 
 from tslam.link.schemas import EdgeMsg, EventMsg, NodeMsg, RobotState, ScanMsg
-from tslam.programs.monitor_view import map_complete, render_lines, snapshot
+from tslam.programs.monitor_view import events_caught_up, map_complete, render_lines, snapshot
 
 
 @dataclass
@@ -103,6 +103,15 @@ def test_terminal_view_says_when_the_map_is_behind_the_robot():
     assert not map_complete(FakeView())
     assert not map_complete(view(synced=False))
     assert not map_complete(view(epoch="older"))
+
+
+def test_a_snapshot_waits_for_the_last_event_the_state_announces():
+    # The view's events are seq 0..11 of epoch e1.
+    assert events_caught_up(view(state=state(event_seq=11)))
+    assert not events_caught_up(view(state=state(event_seq=12)))
+    assert not events_caught_up(view(state=state(event_seq=3, epoch="e2")))
+    assert events_caught_up(view(state=state(event_seq=0), events=[]))
+    assert not events_caught_up(FakeView())
 
 
 def test_snapshot_is_json_with_the_documented_keys():

@@ -236,7 +236,7 @@ class Daemon:
             current_edge=edge, goal_node=explorer.goal,
             x=float(odo.x_m), y=float(odo.y_m), theta=float(odo.heading_rad), hypotheses=hyps[:20],
             map_seq=mirror.seq, map_nodes=len(tmap.nodes()), map_edges=len(tmap.edges()),
-            unexplored=len(explorer.unexplored()), error=self.error,
+            unexplored=len(explorer.unexplored()), error=self.error, event_seq=self._event_seq,
         )  # fmt: skip
 
     def _status_line(self, explorer: Explorer, t: float) -> None:

@@ -160,6 +160,7 @@ class DemoRobot:
             map_edges=len(m.edges),
             unexplored=2 * n,
             error=None,
+            event_seq=self.event_seq,
         )
 
     def run(self) -> None:

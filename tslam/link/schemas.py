@@ -81,6 +81,9 @@ class RobotState(msgspec.Struct, frozen=True):
     map_edges: NonNeg
     unexplored: NonNeg
     error: str | None = None
+    # The seq of the last event published before this state (0: none): a snapshot waits for it
+    # because the event history arrives on its own subscription, after the state or not.
+    event_seq: NonNeg = 0
 
 
 class EventMsg(msgspec.Struct, frozen=True):

@@ -27,7 +27,13 @@ from contextlib import contextmanager, suppress
 from typing import TYPE_CHECKING, Any
 
 from tslam.programs.cli import UserError
-from tslam.programs.monitor_view import CLEAR, map_complete, render_lines, snapshot
+from tslam.programs.monitor_view import (
+    CLEAR,
+    events_caught_up,
+    map_complete,
+    render_lines,
+    snapshot,
+)
 from tslam.programs.monitor_web import OPS, MonitorWeb, Notifier
 
 if TYPE_CHECKING:
@@ -291,7 +297,10 @@ def _not_seen(args: argparse.Namespace, robot: str, view: Any) -> int:
 def _print_once(
     args: argparse.Namespace, robot: str, client: MonitorClient, notifier: Notifier
 ) -> int:
-    view = _wait_for(client, notifier, lambda v: _seen(v) and map_complete(v), args.timeout)
+    view = _wait_for(
+        client, notifier, lambda v: _seen(v) and map_complete(v) and events_caught_up(v),
+        args.timeout,
+    )  # fmt: skip
     if not _seen(view):
         return _not_seen(args, robot, view)
     if not map_complete(view):

@@ -68,6 +68,14 @@ def map_complete(view: Any) -> bool:
     return view.epoch == state.epoch and view.seq >= state.map_seq
 
 
+def events_caught_up(view: Any) -> bool:
+    """True once the view holds the last event the robot's state announces, if it announces one."""
+    state = view.state
+    if state is None or state.event_seq == 0:
+        return state is not None
+    return any(e.epoch == state.epoch and e.seq >= state.event_seq for e in view.events)
+
+
 def _heading_deg(theta: float) -> float:
     # Odometry accumulates whole turns (-287 deg); people read headings in (-180, 180].
     return math.degrees(math.remainder(theta, math.tau)) if math.isfinite(theta) else theta
