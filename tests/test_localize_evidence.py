@@ -44,6 +44,17 @@ def test_a_disturbed_length_refutes_only_when_too_short():
     assert tol.length_ok(None, mapped) and bound.length_ok(None, mapped)
 
 
+def test_a_disturbed_length_is_longer_by_no_more_than_the_robot_drove_off_the_edge():
+    # fig12 seed 5: back from a dead end at the end of a 1.3 m edge, 0.08 m off the edge on
+    # the way, the robot went through the junction unhomed and measured 6.5 m to the next.
+    bound = Tolerances(length_abs_m=0.25, length_rel=0.08, at_least=True, wandered_m=0.08)
+    mapped = 1.3  # slack 0.25 + 0.104 m
+    assert not bound.length_ok(6.5, mapped)
+    assert bound.length_ok(1.3 + 0.354 + 0.08, mapped)
+    assert not bound.length_ok(1.3 + 0.354 + 0.09, mapped)
+    assert not bound.length_ok(0.9, mapped)  # too short stays refuted
+
+
 @pytest.mark.parametrize(
     ("crowd", "needed"),
     [

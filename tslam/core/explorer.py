@@ -20,11 +20,16 @@ take; the arbiter first decides where the robot is:
 * it does not know where it came from (it lost its edge, or an expected node was not there):
   the node goes into the map unattached and every old node that looks like it is a hypothesis.
   A piece of map left unattached that way, once nothing else is left to explore, is merged
-  where it fits if it fits one place only, by the evidence a hypothesis needs.
+  where it fits if it fits one place only, by the evidence a hypothesis needs;
+* it found a new node by an edge its look-alike's twin has explored already: the node just
+  left may be a copy of that twin, mapped again after the robot lost its way, and the new node
+  the old place that edge leads to (a lead-in hypothesis). A hypothesis whose merge would make
+  a rival true as well (the rival placed the fragment on the copies) does not compete with it.
 
-Dead reckoning is otherwise trusted only over a few metres (a return from a dead end) and, at
-a merge, as a bound on how far the heading can have turned since the old node was read: a
-mirror image of a place (fig15) fits the topology but is turned too far.
+Dead reckoning is otherwise trusted only over a few metres (a return from a dead end) and as
+a bound on how far the heading can have turned since the old node was read: a mirror image of
+a place (fig15) fits the topology but is turned too far. Two old places become one by a
+lead-in only if both pairs fit that bound.
 
 Then it picks the next departure: a test if hypotheses are open, else the next step of a
 planned path, else an unexplored departure here, else a path in the graph to the nearest node
@@ -57,10 +62,10 @@ from tslam.core.localize import (
     predict,
     separating_port,
 )
-from tslam.core.placements import other_placements, placements
+from tslam.core.placements import Placement, other_placements, placements
 from tslam.core.portmap import PortMap, match_by_angle
 from tslam.core.signature import Signature
-from tslam.core.topomap import Likeness, MapError, Step, TopoMap
+from tslam.core.topomap import Likeness, MapError, MergePlan, Step, TopoMap
 from tslam.core.tracer import (
     Behaviour,
     BoundaryReached,
@@ -70,6 +75,7 @@ from tslam.core.tracer import (
     TracerParams,
 )
 from tslam.core.walkon import Walk, WalkParams, walk_back, walk_on
+from tslam.core.zipmerge import implies, merge_mapping
 
 TAU = 2.0 * math.pi
 
@@ -124,6 +130,12 @@ class ExplorerParams:
     # A piece of map the robot cannot reach, fitting one place only, is merged there
     # (``Explorer._place_orphans``).
     place_orphans: bool = True
+    # A new node reached from a node that may be a copy of an old one is tested as the old
+    # place that edge leads to (``Explorer._lead_ins``).
+    lead_ins: bool = True
+    # A rival hypothesis that a proven one's merge makes true as well does not block it
+    # (``Explorer._fold_implied``).
+    fold_implied: bool = True
 
 
 @dataclass(frozen=True)
@@ -163,6 +175,7 @@ class Explorer:
         self.leaving: tuple[int, int] | None = None  # (node, port) being traced
         self.detoured = False  # the tracer left the edge since, and did not rejoin it
         self.disturbed = False  # ... or left it and rejoined it: the length is only a bound
+        self.wandered_m = 0.0  # ... the distance driven off the edge since (excursions)
         self._detour_from: tuple[float, float, float, bool] | None = None
         self.partial_m = 0.0  # length before a weak meet point passed through
         self._through: int | None = None  # ... and the departure that goes on through it
@@ -180,6 +193,9 @@ class Explorer:
         self._odo: Odometry | None = None
         self.paths = EdgePaths()
         self.born: dict[int, float] = {}  # meet node -> encoder distance its angles were read at
+        # Nodes whose look-alikes were tested and given up on: a copy of one of them may
+        # stand in the map (``_lead_ins``).
+        self.doubtful: set[int] = set()
 
     @property
     def mode(self) -> Mode:
@@ -289,6 +305,7 @@ class Explorer:
             # After a long one the length says nothing any more: the robot does not know
             # where it came from.
             short = gap <= self.p.rejoin_m and odo.distance_m - d0 - gap <= self.p.rejoin_m
+            self.wandered_m += odo.distance_m - d0
             if short and not off_already:
                 self.detoured = False
             self._detour_from = None
@@ -329,6 +346,7 @@ class Explorer:
             self.paths.restart()
         self.leaving = (node, port)
         self.detoured = self.disturbed = False
+        self.wandered_m = 0.0
         self._detour_from = None
         self.partial_m = 0.0
 
@@ -637,13 +655,55 @@ class Explorer:
             self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=len(fresh)))
         if fresh:
             self.hyps.fragment.add(node)
-        if dropped or fresh:
+        leads = self._lead_ins(f, j, node, a, length) if self.p.lead_ins else []
+        leads = [h for h in leads if h.mapping[node] not in implied]
+        for h in leads:
+            self.hyps.live.append(h)
+            self.hyps.fragment.add(node)
+        if dropped or fresh or leads:
             self._note(
-                f"node {node}: {len(fresh)} look-alike(s), {dropped} hypothesis(es) refuted, "
-                f"{len(self.hyps.live)} open"
+                f"node {node}: {len(fresh)} look-alike(s), "
+                + (f"{len(leads)} if node {f} is mapped twice, " if leads else "")
+                + f"{dropped} hypothesis(es) refuted, {len(self.hyps.live)} open"
             )
         self.partial_m = 0.0
         return node, 0
+
+    def _lead_ins(
+        self, f: int, j: int, node: int, a: int, length: float | None
+    ) -> list[Hypothesis]:
+        """Old places the new ``node`` may be although the edge that leads there is already
+        mapped: node ``f``, just left by its unexplored port ``j``, may be the same place as
+        an old node ``g`` whose port in that direction is explored, to ``c``. The robot, lost
+        once, mapped a place again (fig12 seed 5: node 7 beside node 2); from then on every
+        arrival by an edge only one of the two has explored is "new", since the old node
+        that leads there is never a candidate, and the copies multiply. So where ``f`` or
+        ``g`` had its look-alikes given up on (``doubtful``), the hypothesis maps ``f`` to
+        ``g`` and ``node`` to ``c``. The edge just traced is tested as a prediction would be,
+        but counts for nothing: the merge needs the usual proof from edges still to come.
+        Two old places become one only if dead reckoning's heading fits both pairs, so
+        without odometry (a mirror image in fig15 fits everything else) there are none."""
+        if self.map.node(f).kind != "meet" or node not in self.born:
+            return []
+        tol = self._tol()
+        seen = self.map.signature(node)
+        taken = self.hyps.fragment | {f, node}
+        out: list[tuple[int, int, int, int]] = []
+        for g, kf in candidates(self.map, self.map.signature(f), tol, taken, None):
+            e = self.map.node(g).ports[(j + kf) % self.map.node(g).degree]
+            if e is None or not {f, g} <= self.born.keys() or not {f, g} & self.doubtful:
+                continue
+            if not self._heading_fits(f, g, kf):
+                continue
+            edge = self.map.edge(e)
+            c, q = edge.other_end(g, (j + kf) % self.map.node(g).degree)
+            if c in taken or self.map.node(c).kind != "meet" or c not in self.born:
+                continue
+            pred = Prediction(c, q, edge.length_m, "meet")
+            k = arrival_matches(self.map, seen, a, pred, length, tol)
+            if k is not None and self._heading_fits(node, c, k):
+                out.append((g, kf, c, k))
+        return [Hypothesis({f: (g, kf), node: (c, k)}, crowd=len(out)) for g, kf, c, k in out]
 
     def _lost(self, ev: MeetPointReached, why: str, resuming: bool = False) -> tuple[int, int]:
         """Not knowing where the robot came from, the node goes in unattached and every old
@@ -764,6 +824,8 @@ class Explorer:
         # A hypothesis no prediction has tested yet is in the same position as "all of it is
         # new": possible, unrefuted, unsupported. Only tested hypotheses compete.
         tested = [h for h in self.hyps.live if h.tested]
+        if len(tested) > 1 and self.p.fold_implied:
+            tested = self._fold_implied(tested)
         if len(tested) == 1 and tested[0].proven(self.p.merge_evidence, self.p.weigh_crowd):
             h = tested[0]
             turned = self._heading_misfits(h)
@@ -776,7 +838,7 @@ class Explorer:
                     f"reckoning drifts (nodes {', '.join(map(str, turned))}): not merged"
                 )
                 return self._resolve(node)
-            search = other_placements(self.map, h, self.p.tol, fits=self._heading_fits)
+            search = self._other_placements(h)
             if search is None:
                 self._note(f"node {node}: too many places fit the evidence to check: not merged")
                 self._abandon_hypotheses()
@@ -806,6 +868,42 @@ class Explorer:
             return {}
         self._abandon_hypotheses()
         return {}
+
+    def _other_placements(self, h: Hypothesis) -> tuple[list[Placement], bool] | None:
+        """``other_placements`` of ``h``'s fragment, in the map as ``h``'s claims about old
+        nodes (a lead-in: an old node is a copy of another) would make it: there the copies
+        are one place, and a placement on a copy is no rival."""
+        old = {x: ck for x, ck in h.mapping.items() if x not in self.hyps.fragment}
+        if not old:
+            return other_placements(self.map, h, self.p.tol, fits=self._heading_fits)
+        trial = self.map.copy()
+        try:
+            renamed = merge_mapping(trial, old, self._likeness())
+        except MapError:
+            return [], False
+        mapping = {}
+        for x, (c, k) in h.mapping.items():
+            if x in old or renamed.get(x, (x, 0))[0] != x:
+                continue  # an old node, or made one with one by the claims themselves
+            rc, sc = renamed.get(c, (c, 0))
+            mapping[x] = (rc, (k + sc) % trial.node(rc).degree)
+        return other_placements(
+            trial, replace(h, mapping=mapping), self.p.tol, fits=self._heading_fits
+        )
+
+    def _fold_implied(self, tested: list[Hypothesis]) -> list[Hypothesis]:
+        """The one proven hypothesis whose merge makes every other tested one true as well,
+        if there is one (``tslam.core.zipmerge``); else all of them, still rivals."""
+        proven = [h for h in tested if h.proven(self.p.merge_evidence, self.p.weigh_crowd)]
+        for h in sorted(proven, key=lambda h: -(h.confirmed + 0.5 * h.dead_ends)):
+            trial = self.map.copy()
+            try:
+                renamed = merge_mapping(trial, h.mapping, self._likeness())
+            except MapError:
+                continue
+            if all(implies(trial, renamed, o.mapping) for o in tested if o is not h):
+                return [h]
+        return tested
 
     def _place_orphans(self, here: int) -> bool:
         """Merge the pieces of map the robot cannot reach that fit one place only.
@@ -851,6 +949,7 @@ class Explorer:
         # Only hypotheses some prediction has confirmed count: a look-alike whose departures
         # are all unexplored could not be tested yet, which is no ambiguity.
         tested = [h for h in self.hyps.live if h.tested]
+        self.doubtful |= self.hyps.fragment
         for x in sorted(self.hyps.fragment):
             if not self.map.has_node(x):
                 continue
@@ -870,25 +969,14 @@ class Explorer:
         self.hyps.clear()
 
     def _merge(self, h: Hypothesis) -> dict[int, tuple[int, int]]:
-        renamed: dict[int, tuple[int, int]] = {}
         pairs = []
+
+        def record(plan: MergePlan) -> None:
+            pairs.extend((d, r, truth[d], truth[r]) for d, (r, _) in plan.nodes.items())
+
+        truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
         try:
-            for x, (c, k) in sorted(h.mapping.items()):
-                x2, s = renamed.get(x, (x, 0))
-                c2, s2 = renamed.get(c, (c, 0))
-                if x2 == c2 or not self.map.has_node(x2):
-                    continue
-                # Port j of x is port (j + s) of x2; port (j + k) of c is port (j + k + s2)
-                # of c2: so port i of x2 is port (i - s + k + s2) of c2.
-                rot = (k + s2 - s) % self.map.node(c2).degree
-                truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
-                plan = self.map.merge(c2, x2, rot, self._likeness())
-                pairs.extend((d, r, truth[d], truth[r]) for d, (r, _) in plan.nodes.items())
-                for d, (r, sh) in plan.nodes.items():
-                    for old, (cur, s0) in list(renamed.items()):
-                        if cur == d:
-                            renamed[old] = (r, (s0 + sh) % self.map.node(r).degree)
-                    renamed.setdefault(d, (r, sh))
+            renamed = merge_mapping(self.map, h.mapping, self._likeness(), record)
         except MapError as exc:
             self._note(f"merge refused by the map ({exc}): keeping both")
             self._abandon_hypotheses()
@@ -1096,7 +1184,9 @@ class Explorer:
         return Likeness(t.clearance_m, t.angle_rad, t.length_abs_m, t.length_rel)
 
     def _tol(self) -> Tolerances:
-        return replace(self.p.tol, at_least=True) if self.disturbed else self.p.tol
+        if not self.disturbed:
+            return self.p.tol
+        return replace(self.p.tol, at_least=True, wandered_m=self.wandered_m)
 
     def _edge_length(self, measured: float | None) -> float | None:
         """The edge's length from the encoders: the stretch before a weak meet point passed
