@@ -78,6 +78,10 @@ from tslam.core.walkon import Walk, WalkParams, walk_back, walk_on
 from tslam.core.zipmerge import implies, merge_mapping
 
 TAU = 2.0 * math.pi
+# Folding tries each proven hypothesis's merge on a copy of the map. A copy made after losing
+# the way is tested by a few; fig15's aisles are fitted by dozens at once, none of which
+# implies the rest, and trying them all at every arrival took seconds per arrival.
+FOLD_MAX = 4
 
 
 class Mode(enum.Enum):
@@ -824,7 +828,7 @@ class Explorer:
         # A hypothesis no prediction has tested yet is in the same position as "all of it is
         # new": possible, unrefuted, unsupported. Only tested hypotheses compete.
         tested = [h for h in self.hyps.live if h.tested]
-        if len(tested) > 1 and self.p.fold_implied:
+        if 1 < len(tested) <= FOLD_MAX and self.p.fold_implied:
             tested = self._fold_implied(tested)
         if len(tested) == 1 and tested[0].proven(self.p.merge_evidence, self.p.weigh_crowd):
             h = tested[0]
