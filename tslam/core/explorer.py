@@ -694,13 +694,14 @@ class Explorer:
         taken = self.hyps.fragment | {f, node}
         out: list[tuple[int, int, int, int]] = []
         for g, kf in candidates(self.map, self.map.signature(f), tol, taken, None):
-            e = self.map.node(g).ports[(j + kf) % self.map.node(g).degree]
+            pg = (j + kf) % self.map.node(g).degree
+            e = self.map.node(g).ports[pg]
             if e is None or not {f, g} <= self.born.keys() or not {f, g} & self.doubtful:
                 continue
             if not self._heading_fits(f, g, kf):
                 continue
             edge = self.map.edge(e)
-            c, q = edge.other_end(g, (j + kf) % self.map.node(g).degree)
+            c, q = edge.other_end(g, pg)
             if c in taken or self.map.node(c).kind != "meet" or c not in self.born:
                 continue
             pred = Prediction(c, q, edge.length_m, "meet")
@@ -880,11 +881,10 @@ class Explorer:
         old = {x: ck for x, ck in h.mapping.items() if x not in self.hyps.fragment}
         if not old:
             return other_placements(self.map, h, self.p.tol, fits=self._heading_fits)
-        trial = self.map.copy()
-        try:
-            renamed = merge_mapping(trial, old, self._likeness())
-        except MapError:
+        merged = self._merged_copy(old)
+        if merged is None:
             return [], False
+        trial, renamed = merged
         mapping = {}
         for x, (c, k) in h.mapping.items():
             if x in old or renamed.get(x, (x, 0))[0] != x:
@@ -900,14 +900,23 @@ class Explorer:
         if there is one (``tslam.core.zipmerge``); else all of them, still rivals."""
         proven = [h for h in tested if h.proven(self.p.merge_evidence, self.p.weigh_crowd)]
         for h in sorted(proven, key=lambda h: -(h.confirmed + 0.5 * h.dead_ends)):
-            trial = self.map.copy()
-            try:
-                renamed = merge_mapping(trial, h.mapping, self._likeness())
-            except MapError:
-                continue
-            if all(implies(trial, renamed, o.mapping) for o in tested if o is not h):
+            merged = self._merged_copy(h.mapping)
+            if merged is not None and all(
+                implies(*merged, o.mapping) for o in tested if o is not h
+            ):
                 return [h]
         return tested
+
+    def _merged_copy(
+        self, mapping: dict[int, tuple[int, int]]
+    ) -> tuple[TopoMap, dict[int, tuple[int, int]]] | None:
+        """A copy of the map with ``mapping`` merged, and the renames; None if the map
+        refuses the merge."""
+        trial = self.map.copy()
+        try:
+            return trial, merge_mapping(trial, mapping, self._likeness())
+        except MapError:
+            return None
 
     def _place_orphans(self, here: int) -> bool:
         """Merge the pieces of map the robot cannot reach that fit one place only.
@@ -974,11 +983,11 @@ class Explorer:
 
     def _merge(self, h: Hypothesis) -> dict[int, tuple[int, int]]:
         pairs = []
+        truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
 
         def record(plan: MergePlan) -> None:
             pairs.extend((d, r, truth[d], truth[r]) for d, (r, _) in plan.nodes.items())
 
-        truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
         try:
             renamed = merge_mapping(self.map, h.mapping, self._likeness(), record)
         except MapError as exc:
