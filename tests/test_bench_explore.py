@@ -39,6 +39,12 @@ def _row(world="fig12", drift="paper", seed=1, **over):
         "drift": drift,
         "seed": seed,
         "complete": True,
+        "finished": True,
+        "covered": True,
+        "found_places": 3,
+        "true_places": 3,
+        "found_place_edges": 6,
+        "true_place_edges": 6,
         "false_merges": 0,
         "loop_closures_true": 2,
         "loop_closures_found": 2,
@@ -230,6 +236,8 @@ def test_summary_per_method_and_drift():
     s = summarize(rows)
     paper = s["tslam"]["paper"]
     assert paper["runs"] == 2 and paper["complete"] == 1
+    # The incomplete one still says it finished: its map is wrong, and the summary says so.
+    assert paper["finished_wrong"] == 1 and s["tslam"]["none"]["finished_wrong"] == 0
     assert paper["false_merges"] == 2 and paper["runs_with_false_merges"] == 1
     assert paper["missed_closures"] == 1
     assert paper["path_over_gvg_median"] == 2.5 and paper["path_over_gvg_max"] == 3.0
@@ -254,7 +262,7 @@ def test_the_table_lists_every_run_with_both_methods():
     lines = text.splitlines()
     assert any(ln.split()[:3] == ["fig1", "none", "1"] for ln in lines)
     fig14 = next(ln for ln in lines if ln.startswith("fig14"))
-    assert fig14.split()[:6] == ["fig14", "severe", "7", "yes", "0", "5"]
+    assert fig14.split()[:8] == ["fig14", "severe", "7", "yes", "yes", "3/3", "0", "5"]
     assert "fig16 paper s3: ERROR it broke" in text
     assert "NOT MET" in text
 

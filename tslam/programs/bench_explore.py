@@ -42,6 +42,12 @@ REALTIME_MIN = 100.0
 #: The report fields a row copies for T-SLAM, in the order they appear in the JSON.
 TSLAM_FIELDS = (
     "complete",
+    "finished",
+    "covered",
+    "found_places",
+    "true_places",
+    "found_place_edges",
+    "true_place_edges",
     "false_merges",
     "loop_closures_true",
     "loop_closures_found",
@@ -246,7 +252,13 @@ def progress_line(done: int, total: int, row: Row) -> str:
     head = f"[{done:{width}d}/{total}] {row['world']} {row['drift']} s{row['seed']}"
     if "error" in row:
         return f"{head}: error: {row['error']}"
-    state = "complete" if row["complete"] else "incomplete"
+    state = (
+        "complete"
+        if row["complete"]
+        else "finished with a wrong map"
+        if row.get("finished")
+        else "incomplete"
+    )
     return (
         f"{head}: {state}, {row['false_merges']} false merges, "
         f"{row['loop_closures_found']}/{row['loop_closures_true']} loops, "
@@ -278,6 +290,8 @@ def _tslam_summary(rows: Sequence[Row]) -> dict[str, Any]:
         "runs": len(ok),
         "errors": len(rows) - len(ok),
         "complete": sum(1 for r in ok if r["complete"]),
+        # Runs the explorer called done on a map the ground truth says is wrong.
+        "finished_wrong": sum(1 for r in ok if r.get("finished") and not r["complete"]),
         "false_merges": sum(r["false_merges"] for r in ok),
         "runs_with_false_merges": sum(1 for r in ok if r["false_merges"] > 0),
         "missed_closures": sum(r["missed_closures"] for r in ok),
@@ -412,6 +426,8 @@ _RUN_COLUMNS: list[Column] = [
     ("drift", lambda r: r["drift"], True),
     ("seed", lambda r: str(r["seed"]), False),
     ("complete", lambda r: "yes" if r["complete"] else "no", True),
+    ("done", lambda r: "yes" if r.get("finished") else "no", True),
+    ("places", lambda r: f"{r.get('found_places', '-')}/{r.get('true_places', '-')}", False),
     ("FM tslam", lambda r: str(r["false_merges"]), False),
     ("FM base", lambda r: str(r["baseline"]["false_merges"]), False),
     ("missed closures", lambda r: str(r["missed_closures"]), False),
@@ -435,6 +451,7 @@ _FM_COLUMNS: list[Column] = [
 _TSLAM_SUMMARY_COLUMNS: list[Column] = [
     *_GROUP_COLUMNS,
     ("complete", lambda s: f"{s['complete']}/{s['runs']}", False),
+    ("done, map wrong", lambda s: str(s["finished_wrong"]), False),
     *_FM_COLUMNS,
     ("missed closures", lambda s: str(s["missed_closures"]), False),
     ("path/GVG median", lambda s: _fmt(s["path_over_gvg_median"], ".2f"), False),
