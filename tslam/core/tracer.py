@@ -74,8 +74,8 @@ class TracerParams:
     # not smear them (False: the body's frame, as if it stood still).
     sweep_fixed_frame: bool = False
     # On a fast ring, a point the sweep rejected is not homed onto again and is traced through
-    # on the pair of obstacles whose edge goes on the robot's course; on any ring, the robot
-    # leaves a rejected point the way it came in.
+    # on the pair of obstacles whose edge goes on the robot's course. (That the robot leaves a
+    # rejected point the way it came in, once part of this switch, is always so now.)
     rejected_memory: bool = False
     # A sixth: the meet point judged where it is. Of the true meet points the robot came
     # within 0.25 m of, 14 % went unhomed, most because the sweep rejected a point the robot
@@ -464,9 +464,11 @@ class Tracer:
             s.rejected = fast_ring
             # On the way it came in: while homing, the trace law's tangent swings between
             # the pairs of nearly equidistant walls, and at fig12's cut corner it had swung
-            # round, so the robot went back down the edge it had come up.
+            # round, so the robot went back down the edge it had come up. At fig16's weak
+            # meet point (seed 5) that turned the robot back mid-corridor, and the explorer
+            # called a third of the corridor the whole map.
             a = self._approach(odo)
-            if a is not None and p.rejected_memory:
+            if a is not None:
                 s.tangent = (a[2], a[3])
             return None
         self._meet(obs, odo, now, events)
