@@ -154,7 +154,7 @@ def report(run: Run, world_spec: str, seed: int, drift: str) -> dict[str, Any]:
         "drift": drift,
         # The explorer's own "nothing left to explore" is not enough: a robot that turned
         # back mid-corridor can call a third of fig16 the whole (seed 5). Complete is that
-        # and the map right against the ground truth: every place and edge, no place twice.
+        # and the map right against the ground truth: every place and edge, no node twice.
         "complete": bool(
             ex.done and not tmap.unexplored() and score["covered"] and not score["duplicate_nodes"]
         ),
