@@ -44,8 +44,7 @@ def test_the_true_graph_covers_its_world_and_one_edge_less_does_not(gvgs):
     whole = score_exploration(g, _map_of(g), [])
     assert whole["covered"] and whole["found_places"] == whole["true_places"] == 3
     assert whole["found_place_edges"] == whole["true_place_edges"] == len(g.edges)
-    # fig12's block is passed on both sides: two edges join the same pair somewhere, or the
-    # loop has its own node; either way each true edge must be found for itself.
+    # Every true edge counts: leaving any one out leaves the map incomplete.
     for i in range(len(g.edges)):
         less = score_exploration(g, _map_of(g, skip_edges={i}), [])
         assert not less["covered"], f"edge {i} left out"
