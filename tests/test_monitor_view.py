@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 from dataclasses import dataclass, field
 
 from tslam.link.schemas import EdgeMsg, EventMsg, NodeMsg, RobotState, ScanMsg
+from tslam.programs.monitor_cmd import _print_once
 from tslam.programs.monitor_view import events_caught_up, map_complete, render_lines, snapshot
+from tslam.programs.monitor_web import Notifier
 
 
 @dataclass
@@ -132,3 +135,25 @@ def test_snapshot_is_json_with_the_documented_keys():
 def test_snapshot_without_state():
     snap = snapshot("r1", FakeView(online=False))
     assert snap["state"] is None and snap["map"] == {"nodes": [], "edges": []}
+
+
+class _StillClient:
+    """A monitor client whose view never changes."""
+
+    def __init__(self, v: FakeView) -> None:
+        self._v = v
+
+    def view(self) -> FakeView:
+        return self._v
+
+
+def test_a_one_shot_snapshot_says_when_the_event_history_is_short(capsys):
+    # The state announces event 15; the history holds 0..11 and the rest never comes.
+    args = argparse.Namespace(timeout=0.0, json=True)
+    v = view(state=state(event_seq=15))
+    assert _print_once(args, "r1", _StillClient(v), Notifier()) == 0
+    out = capsys.readouterr()
+    assert "announced event 15 but the history holds up to 11" in out.err
+    assert len(json.loads(out.out)["events"]) == 12  # what arrived is still printed
+    assert _print_once(args, "r1", _StillClient(view(state=state(event_seq=11))), Notifier()) == 0
+    assert capsys.readouterr().err == ""

@@ -310,6 +310,16 @@ def _print_once(
             file=sys.stderr,
         )
         return 1
+    if not events_caught_up(view):
+        # The map and state are whole; only the history is short. Say so rather than print
+        # it as if it were all.
+        held = max((e.seq for e in view.events if e.epoch == view.state.epoch), default=None)
+        print(
+            f"tslam monitor: robot {robot!r} announced event {view.state.event_seq} but the "
+            f"history holds {'none' if held is None else f'up to {held}'} after "
+            f"{args.timeout:g} s; printing what arrived",
+            file=sys.stderr,
+        )
     if args.json:
         print(json.dumps(snapshot(robot, view), indent=2))
     else:
