@@ -84,23 +84,23 @@ def score_exploration(
         if t is not None:
             per_true[t] = per_true.get(t, 0) + 1
     true_pairs = {frozenset((e.u, e.v)) for e in gvg.edges}
+    place = places(gvg)
     found_pairs = set()
+    mapped_links: Counter[frozenset[int]] = Counter()
     for e in edges:
         a, b = true_of.get(e["u"]), true_of.get(e["v"])
-        if a is not None and b is not None and frozenset((a, b)) in true_pairs:
+        if a is None or b is None:
+            continue
+        if frozenset((a, b)) in true_pairs:
             found_pairs.add(frozenset((a, b)))
-    place = places(gvg)
+        mapped_links[frozenset((place[a], place[b]))] += 1
     true_places = {place[t] for t in meet_ids}
     found_places = {place[t] for t in found_meets}
     # Two places can be joined twice (the two ways round a block): each edge is to find.
     true_links = Counter(
         link for e in gvg.edges if len(link := frozenset((place[e.u], place[e.v]))) == 2
     )
-    mapped_links: Counter[frozenset[int]] = Counter()
-    for e in edges:
-        a, b = true_of.get(e["u"]), true_of.get(e["v"])
-        if a is not None and b is not None:
-            mapped_links[frozenset((place[a], place[b]))] += 1
+    n_links = sum(true_links.values())
     found_links = sum(min(n, mapped_links[link]) for link, n in true_links.items())
     false_merges = 0
     for record in merges:
@@ -124,9 +124,9 @@ def score_exploration(
         "found_edges": len(found_pairs),
         "true_places": len(true_places),
         "found_places": len(found_places),
-        "true_place_edges": sum(true_links.values()),
+        "true_place_edges": n_links,
         "found_place_edges": found_links,
-        "covered": found_places == true_places and found_links == sum(true_links.values()),
+        "covered": found_places == true_places and found_links == n_links,
         "map_edges": len(edges),
         "loop_closures_true": cycle_rank(len(gvg_nodes), gvg_edges, gvg_nodes),
         "loop_closures_found": cycle_rank(

@@ -256,7 +256,7 @@ def progress_line(done: int, total: int, row: Row) -> str:
         "complete"
         if row["complete"]
         else "finished with a wrong map"
-        if row.get("finished")
+        if row["finished"]
         else "incomplete"
     )
     return (
@@ -291,7 +291,7 @@ def _tslam_summary(rows: Sequence[Row]) -> dict[str, Any]:
         "errors": len(rows) - len(ok),
         "complete": sum(1 for r in ok if r["complete"]),
         # Runs the explorer called done on a map the ground truth says is wrong.
-        "finished_wrong": sum(1 for r in ok if r.get("finished") and not r["complete"]),
+        "finished_wrong": sum(1 for r in ok if r["finished"] and not r["complete"]),
         "false_merges": sum(r["false_merges"] for r in ok),
         "runs_with_false_merges": sum(1 for r in ok if r["false_merges"] > 0),
         "missed_closures": sum(r["missed_closures"] for r in ok),
@@ -426,8 +426,8 @@ _RUN_COLUMNS: list[Column] = [
     ("drift", lambda r: r["drift"], True),
     ("seed", lambda r: str(r["seed"]), False),
     ("complete", lambda r: "yes" if r["complete"] else "no", True),
-    ("done", lambda r: "yes" if r.get("finished") else "no", True),
-    ("places", lambda r: f"{r.get('found_places', '-')}/{r.get('true_places', '-')}", False),
+    ("done", lambda r: "yes" if r["finished"] else "no", True),
+    ("places", lambda r: f"{r['found_places']}/{r['true_places']}", False),
     ("FM tslam", lambda r: str(r["false_merges"]), False),
     ("FM base", lambda r: str(r["baseline"]["false_merges"]), False),
     ("missed closures", lambda r: str(r["missed_closures"]), False),
