@@ -147,20 +147,56 @@ def test_stray_deep_readings_do_not_split_a_bent_wall_on_a_fast_ring():
     assert len(sweep_minima(b, d)) == 2
 
 
-def test_one_stray_reading_between_the_faces_of_a_bent_wall_does_not_split_it():
-    """fig12's cut corner on a Nomad ring: a single outlier past the bend between the cut
-    face and the side wall made them two obstacles, and with the block opposite, a meet point
-    4.7 m from any true one. A view into a doorway spans degrees and still separates."""
-    b = _ring(5.6)
+def _bent_wall_with_an_outlier(step_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """A concave bend's two faces 1.40 and 1.42 m off, its vertex between them, and one
+    outlier at the vertex: fig12's cut corner."""
+    b = _ring(step_deg)
     deg = np.degrees(b)
     d = np.full(len(b), np.inf)
     d[(deg >= 330) & (deg <= 350)] = 1.40
     d[(deg > 350) | (deg < 10)] = 1.52
     d[(deg >= 10) & (deg <= 30)] = 1.42
-    d[np.argmin(np.abs(deg - 0.0))] = 5.3  # one outlier at the vertex
+    d[np.argmin(np.abs(deg - 0.0))] = 5.3
+    return b, d
+
+
+def test_one_stray_reading_between_the_faces_of_a_bent_wall_does_not_split_it():
+    """fig12's cut corner on a Nomad ring: a single outlier past the bend between the cut
+    face and the side wall made them two obstacles, and with the block opposite, a meet point
+    4.7 m from any true one. A view into a doorway spans degrees and still separates."""
+    b, d = _bent_wall_with_an_outlier(5.6)
     assert len(sweep_minima(b, d)) == 1
+    deg = np.degrees(b)
     d[(deg > 354) | (deg < 6)] = 3.7  # a doorway, two readings wide
     assert len(sweep_minima(b, d)) == 2
+
+
+def test_one_deeper_reading_makes_the_sweep_doubtful_and_twice_the_readings_decide():
+    """fig14's lab door from the junction beside it: the jambs 32 degrees apart, the view
+    between them 7 degrees wide, one reading of a Nomad ring's sweep. The sweep joins them but
+    says it doubts; swept twice as densely, two readings fall in the view and the jambs are
+    two obstacles, where one stray reading still joins a bent wall's faces."""
+    def door(step_deg: float) -> tuple[np.ndarray, np.ndarray]:
+        b = _ring(step_deg)
+        deg = np.degrees(b)
+        d = np.full(len(b), np.inf)
+        d[(deg >= 248) & (deg <= 274.5)] = 1.76  # the near jamb
+        d[(deg >= 280.5) & (deg <= 306)] = 1.89  # the far jamb
+        d[(deg > 274.5) & (deg < 280.5)] = 3.94  # the corridor's far wall, through the door
+        return b, d
+
+    doubts: list[float] = []
+    b, d = door(5.6)
+    assert np.count_nonzero(np.isfinite(d) & (d > 3.0)) == 1
+    assert len(sweep_minima(b, d, doubts=doubts)) == 1
+    assert len(doubts) == 1 and abs(math.degrees(doubts[0]) - 277.0) < 10.0
+    doubts.clear()
+    b, d = door(2.8)
+    assert len(sweep_minima(b, d, doubts=doubts)) == 2 and doubts == []
+    # A bent wall with one stray reading at its vertex: doubtful too, and still one wall
+    # with the stray reading's neighbours swept on either side of it.
+    b, d = _bent_wall_with_an_outlier(2.8)
+    assert len(sweep_minima(b, d, doubts=doubts)) == 1 and len(doubts) == 1
 
 
 def test_the_tracer_finds_no_meet_point_at_fig12s_cut_corner():

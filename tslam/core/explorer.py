@@ -42,6 +42,7 @@ callback is for scoring in simulation only; it is stored on new nodes and never 
 
 from __future__ import annotations
 
+import copy
 import enum
 import math
 from collections.abc import Callable
@@ -128,6 +129,12 @@ class ExplorerParams:
     # readings, is not that place. It is what tells fig15's mirror images apart.
     heading_base_rad: float = math.radians(25.0)
     heading_drift_rad_per_m: float = math.radians(0.25)
+    # Over one edge dead reckoning is good (section V-C), so a merge that makes an edge a
+    # loop needs its two ends about where the robot left and came back: within this much
+    # and this fraction of the edge's length. fig1's mirrored rooms, 3.6 m apart along one
+    # 3.9 m edge, were merged as one room whose edge came back to it (seed 11).
+    loop_gap_m: float = 0.5
+    loop_gap_rel: float = 0.15
     # Gone through the expected node without homing (a weak meet point): this traversal's
     # own dead-reckoned path says which way the robot turned there (``tslam.core.walkon``).
     walk: WalkParams = field(default_factory=WalkParams)
@@ -200,6 +207,8 @@ class Explorer:
         self._odo: Odometry | None = None
         self.paths = EdgePaths()
         self.born: dict[int, float] = {}  # meet node -> encoder distance its angles were read at
+        # Edge -> how far apart dead reckoning put its two ends, read one traversal apart.
+        self.edge_gap: dict[int, float] = {}
         # Nodes whose look-alikes were tested and given up on: a copy of one of them may
         # stand in the map (``_lead_ins``).
         self.doubtful: set[int] = set()
@@ -327,16 +336,13 @@ class Explorer:
         through, self._through = self._through, None
         if through is not None:
             return through  # a weak meet point: carry on along the edge
-        renamed = self._resolve(node)
-        if node in renamed:
-            node, shift = renamed[node]
-            pm = pm.renamed(shift)
-        self.here = node
-        self._last_visit = (node, ev.departures_rad, pm, ev.x_m, ev.y_m)
-        self._at = (ev, node, pm)
+        node, pm = self._stand(ev, node, pm, self._resolve(node))
         port = self._next_port(node, pm.arrival)
-        if port is None and self.p.place_orphans and self._place_orphans(node):
-            port = self._next_port(node, pm.arrival)
+        if port is None and self.p.place_orphans:
+            renamed = self._place_orphans(node)
+            if renamed:
+                node, pm = self._stand(ev, node, pm, renamed)
+                port = self._next_port(node, pm.arrival)
         if port is None:
             self._hold(node)
             return ev.arrival_index or 0
@@ -646,7 +652,10 @@ class Explorer:
                 survivors.append(h)
                 confirmed.append((h, pred.node, k))
         node = self._add_meet(ev)
-        self.map.connect(f, j, node, a, 0.0 if length is None else length)
+        edge = self.map.connect(f, j, node, a, 0.0 if length is None else length)
+        lv = self._last_visit
+        if lv is not None and lv[0] == f:
+            self.edge_gap[edge] = math.hypot(ev.x_m - lv[3], ev.y_m - lv[4])
         for h, w, k in confirmed:
             h.mapping[node] = (w, k)
             h.confirmed += 1
@@ -940,7 +949,19 @@ class Explorer:
         except MapError:
             return None
 
-    def _place_orphans(self, here: int) -> bool:
+    def _stand(
+        self, ev: MeetPointReached, node: int, pm: PortMap, renamed: dict[int, tuple[int, int]]
+    ) -> tuple[int, PortMap]:
+        """The robot stands at ``node``, as a merge may have renamed it."""
+        if node in renamed:
+            node, shift = renamed[node]
+            pm = pm.renamed(shift)
+        self.here = node
+        self._last_visit = (node, ev.departures_rad, pm, ev.x_m, ev.y_m)
+        self._at = (ev, node, pm)
+        return node, pm
+
+    def _place_orphans(self, here: int) -> dict[int, tuple[int, int]]:
         """Merge the pieces of map the robot cannot reach that fit one place only.
 
         A fragment begun when the robot was lost, whose hypotheses went when it was lost
@@ -949,8 +970,8 @@ class Explorer:
         is evidence like any hypothesis's: placed on the rest of the map everywhere it fits
         (``placements``, the test every merge passes), it is merged if it fits exactly one
         place and holds the edges a proven hypothesis needs (each edge between two of its
-        meet points a confirmation, each dead end half of one). Returns whether anything
-        merged.
+        meet points a confirmation, each dead end half of one). Returns the merge's renames
+        (empty if nothing merged): a merge may rename the node the robot stands at too.
         """
         for comp in sorted(nx.connected_components(self.map.graph), key=min):
             if here in comp or not any(None in self.map.node(n).ports for n in comp):
@@ -966,9 +987,10 @@ class Explorer:
                 continue
             h.mapping = dict(found[0])
             self._note(f"nodes {', '.join(map(str, nodes))}, out of reach, fit one place only")
-            if self._merge(h):
-                return True  # the components have changed: the next arrival looks again
-        return False
+            renamed = self._merge(h)
+            if renamed:
+                return renamed  # the components have changed: the next arrival looks again
+        return {}
 
     def _abandon_hypotheses(self, lost: bool = False) -> None:
         """Nothing can tell the fragment from its look-alikes: keep its nodes as new places,
@@ -1004,6 +1026,15 @@ class Explorer:
         self.hyps.clear()
 
     def _merge(self, h: Hypothesis) -> dict[int, tuple[int, int]]:
+        loop = self._false_loop(h)
+        if loop is not None:
+            e, gap = loop
+            self._note(
+                f"merge refused: it makes edge {e} a loop, but dead reckoning put its ends "
+                f"{gap:.1f} m apart: keeping both"
+            )
+            self._abandon_hypotheses()
+            return {}
         pairs = []
         truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
 
@@ -1023,6 +1054,29 @@ class Explorer:
         self._apply_renames(renamed)
         self.hyps.clear()
         return renamed
+
+    def _false_loop(self, h: Hypothesis) -> tuple[int, float] | None:
+        """An edge the merge of ``h`` would make a loop although dead reckoning, good over
+        one edge, put its two ends apart; None if there is none."""
+        p = self.p
+        far = {
+            e: gap
+            for e, gap in self.edge_gap.items()
+            if self.map.has_edge(e)
+            and gap > p.loop_gap_m + p.loop_gap_rel * self.map.edge(e).length_m
+        }
+        if not far:
+            return None
+        trial = copy.deepcopy(self.map)
+        try:
+            renamed = merge_mapping(trial, h.mapping, self._likeness())
+        except MapError:
+            return None  # the map refuses it anyway, and says why
+        for e, gap in sorted(far.items()):
+            ends = self.map.edge(e)
+            if renamed.get(ends.u, (ends.u, 0))[0] == renamed.get(ends.v, (ends.v, 0))[0]:
+                return e, gap
+        return None
 
     def _apply_renames(self, renamed: dict[int, tuple[int, int]]) -> None:
         if self.leaving is not None and self.leaving[0] in renamed:

@@ -117,11 +117,13 @@ class RingSensor:
         self._prev_dist: np.ndarray | None = None
         self._held: np.ndarray | None = None
         self._keep: tuple[np.ndarray, ...] | None = None
+        self.points: np.ndarray | None = None  # the last update's echo points (robot frame)
 
     def update(self, scan: SonarScan, odo: Odometry) -> list[Obstacle]:
         """Obstacles seen from the pose ``odo``, nearest first."""
         self.history.add(odo)
         pts = self.echo_points(scan)
+        self.points = pts
         p = self.p
         return local_minima(pts, p.plateau_m, p.merge_rad, p.bend_merge_rad, p.bend_ratio)
 

@@ -41,9 +41,14 @@ BENT_WALL_MERGE_RAD = math.radians(60.0)
 #: corner read 61 degrees apart and was taken for a meet point. With the tracer's
 #: ``centred_meet`` the sweep joins up to 70.
 WIDE_BEND_MERGE_RAD = math.radians(70.0)
-#: The narrowest view past a bend that makes its two faces two obstacles: two readings of a
-#: Nomad ring's sweep. One outlier between a cut corner's faces made fig12's a meet point.
-MIN_VIEW_RAD = math.radians(8.0)
+#: The narrowest view past a bend that makes its two faces two obstacles, in readings and in
+#: degrees: one outlier between a cut corner's faces made fig12's a meet point, and a fast
+#: ring's outliers come several to a degree. A doorway's view between its jambs can be as
+#: narrow as 7 degrees (fig14's lab door, 32 degrees of jamb to jamb from the junction beside
+#: it, less the 25-degree beam): one reading of a Nomad ring's sweep, 5.6 degrees apart. So a
+#: single deeper reading makes the sweep *doubtful*, and the tracer sweeps once more.
+MIN_VIEW_READINGS = 2
+MIN_VIEW_RAD = math.radians(5.0)
 
 
 class Sweep:
@@ -86,10 +91,14 @@ class Sweep:
         heading_rad: float = 0.0,
         merge_rad: float = BENT_WALL_MERGE_RAD,
         bridge: bool = False,
+        doubts: list[float] | None = None,
     ) -> list[Obstacle]:
-        """The obstacles seen, in the frame of a robot heading ``heading_rad``."""
+        """The obstacles seen, in the frame of a robot heading ``heading_rad``; ``doubts``
+        as for ``sweep_minima``."""
         bearing = np.asarray(self._bearing) - heading_rad
-        return sweep_minima(bearing, np.asarray(self._dist), merge_rad, bridge=bridge)
+        return sweep_minima(
+            bearing, np.asarray(self._dist), merge_rad, bridge=bridge, doubts=doubts
+        )
 
 
 def sweep_minima(
@@ -102,6 +111,7 @@ def sweep_minima(
     min_samples: int = 3,
     min_run_rad: float = math.radians(8.0),
     bridge: bool = False,
+    doubts: list[float] | None = None,
 ) -> list[Obstacle]:
     """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
 
@@ -111,6 +121,10 @@ def sweep_minima(
     its plateau to the next one on it: a dropout, or another transducer's echo from a side
     lobe or the far wall at the same bearing, cuts a wall's run into pieces too short to
     count otherwise, and a junction's third wall goes unseen.
+
+    Two runs joined as one bent wall although a deeper reading lies between them add the
+    bearing of that view to ``doubts``: more readings there would tell a stray echo from a
+    doorway.
     """
     n = len(bearing_rad)
     if n < 3:
@@ -183,8 +197,11 @@ def sweep_minima(
     # Every neighbouring pair, counter-clockwise: with two runs that is both arcs between them.
     for k in range(m if m > 1 else 0):
         a, c = runs[k], runs[(k + 1) % m]
-        if _one_wall(a, c, d, merge_rad, bend_ratio):
+        one = _one_wall(a, c, d, merge_rad, bend_ratio)
+        if one is not False:
             parent[root((k + 1) % m)] = root(k)
+        if one is None and doubts is not None:
+            doubts.append(float(a[1] + 0.5 * ((c[1] - a[1]) % (2 * math.pi))))
     best: dict[int, tuple[float, float, int, int]] = {}
     for k, run in enumerate(runs):
         r = root(k)
@@ -208,8 +225,9 @@ def _one_wall(
     d: np.ndarray,
     merge_rad: float,
     bend_ratio: float,
-) -> bool:
-    """``c`` follows ``a`` counter-clockwise; could the two be one bent wall?"""
+) -> bool | None:
+    """``c`` follows ``a`` counter-clockwise; could the two be one bent wall? None: yes, but
+    a view between them too narrow to count was seen (a stray echo, or a narrow doorway)."""
     if (c[1] - a[1]) % (2 * math.pi) >= merge_rad:
         return False
     if max(a[0], c[0]) > bend_ratio * min(a[0], c[0]):
@@ -224,7 +242,7 @@ def _one_wall(
     while k != end:
         if math.isfinite(d[k]) and d[k] > limit:
             deep += 1
-            if deep * 2 * math.pi / n >= MIN_VIEW_RAD:
+            if deep >= MIN_VIEW_READINGS and deep * 2 * math.pi / n >= MIN_VIEW_RAD:
                 return False
         k = (k + 1) % n
-    return True
+    return True if deep == 0 else None

@@ -259,6 +259,9 @@ class TopoMap:
     def has_node(self, n: int) -> bool:
         return n in self._nodes
 
+    def has_edge(self, e: int) -> bool:
+        return e in self._edges
+
     def nodes(self) -> list[Node]:
         return [self._nodes[k] for k in sorted(self._nodes)]
 

@@ -15,10 +15,13 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
 from hal.interfaces import DriveLimits
 from hal.types import DriveStatus, Odometry, SonarScan, Twist
 from tslam.core import laws
 from tslam.core.edgelength import EdgeOdometer
+from tslam.core.place import place_obstacles
 from tslam.core.sensing import Obstacle, RingSensor, SensingParams
 from tslam.core.sweep import BENT_WALL_MERGE_RAD, WIDE_BEND_MERGE_RAD, Sweep
 
@@ -48,12 +51,21 @@ class TracerParams:
     meet_spread_m: float = 0.10  # d3 - d1 at the settled point that makes it a meet point
     arm_tol_m: float = 0.35  # d3 - d1 that re-arms meet detection after leaving a node
     degree_tol_m: float = 0.10  # d_k - d1 that counts obstacle k at a homed meet point
+    # A homed meet point reads its place: the meet points this close that the sweep's
+    # obstacles define count as one junction, with the edges of all of them (place.py; 0:
+    # the point alone). A seventh switch, off: it finds the edges that leave from the other
+    # point of a close pair (fig1's 0.20 m pair, fig14's lab door), but the sweep does not
+    # hear every obstacle of a place from each of its points, and a place read with four
+    # edges on one pass and three on another is two places to the explorer (README).
+    place_radius_m: float = 0.0
+    place_tol_m: float = 0.05  # ... each equidistant to its three obstacles within this
     settle_tol_m: float = 0.03  # homing stops this close to the estimate
     converge_tol_m: float = 0.06  # ... and has converged if the sweep agrees this well
     # Standing on a meet point the turret turns through one sonar spacing (22.5 degrees)
     # while each transducer fires four times (5.6 degrees apart): bearings to a few degrees,
     # and every obstacle answers over four or five samples (see sweep.py).
     sweep_s: float = 3.9
+    sweep_again: bool = True  # a doubtful sweep turns the turret once more (sweep.py)
     sweep_radps: float = math.radians(22.5) / 3.9
     home_gain: float = 1.0
     home_max_mps: float = 0.15
@@ -90,8 +102,23 @@ class TracerParams:
     centred_meet: bool = False
     home_patience_s: float = 1.0  # with centred_meet
     sensing: SensingParams = field(default_factory=SensingParams)
-    boundary_clearance_m: float = 0.45  # the edge has run into its corner
+    boundary_clearance_m: float = 0.45  # the edge has run into its corner ...
+    # ... if the corner is there: an echo this close ahead, within this angle of the way. A
+    # corner's vertex is 0.64 m ahead of a robot 0.45 m off both its walls (0.9 m for a
+    # 60-degree corner). A doorway is open ahead: each jamb of a 1 m door is 0.5 m off, so
+    # sonar noise read fig14's doors as dead ends, and the ring could not tell by the two
+    # jambs' bearings (124 degrees apart 8 cm short of the door, a square corner's walls up
+    # to 112 with the ring's +/-11 degrees each).
+    corner_ahead_m: float = 1.0
+    corner_ahead_rad: float = math.radians(25.0)
+    pinch_clearance_m: float = 0.3  # ... or the gap is too narrow to pass anyway
     depart_m: float = 0.15  # leave a meet point along its departure before tracing
+    # ... and on along it, up to this far, until the ring sees the edge's two obstacles on
+    # either side of the way: through a doorway the ring's first view merges the two jambs
+    # into one obstacle (0: trace from ``depart_m`` on whatever the ring sees).
+    depart_until_sides_m: float = 1.5
+    sides_cycles: int = 5  # ... seen so in this many control cycles running
+    sides_along_rad: float = math.radians(45.0)  # ... their edge this close to the way
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
@@ -155,11 +182,15 @@ class _State:
     since: float = 0.0
     settle_tries: int = 0
     sweep: Sweep | None = None
+    swept_again: bool = False  # the sweep was doubtful and the turret has turned once more
     home_target: tuple[float, float] | None = None  # homing's last estimate, odometry frame
     home_seen: float = 0.0  # when the ring last gave that estimate
     depart_dir: float = 0.0
     depart_from: tuple[float, float] = (0.0, 0.0)
     depart_m: float = 0.0
+    # Control cycles the departure's two obstacles have straddled it, once they did not at
+    # first (-1: not looked yet).
+    sides_seen: int = -1
     node_distance: float | None = None  # encoder distance at the last node
     node_kind: str = ""
     last_meet: tuple[float, float] | None = None  # odometry frame
@@ -286,9 +317,13 @@ class Tracer:
             s.armed = not laws.equidistant(obs, 3, p.arm_tol_m) or self._new_meet_ahead(obs, odo)
         if obs[0].distance_m > p.boundary_clearance_m + 0.1:
             s.boundary_armed = True
-        if s.boundary_armed and obs[0].distance_m < p.boundary_clearance_m:
+        if (
+            s.boundary_armed
+            and obs[0].distance_m < p.boundary_clearance_m
+            and (obs[0].distance_m < p.pinch_clearance_m or self._corner_ahead(odo))
+        ):
             s.boundary_armed = False  # until the robot is clear of this corner again
-            self._boundary(obs, odo, now, events)
+            self._boundary(obs[0].distance_m, odo, now, events)
             return None
         if obs[1].distance_m - obs[0].distance_m > p.off_edge_m:
             s.behaviour = Behaviour.ACCESS  # these two are not the edge's obstacles
@@ -318,6 +353,18 @@ class Tracer:
         if not s.trail or odo.distance_m - s.trail[-1][0] >= 0.02:
             s.trail.append((odo.distance_m, odo.x_m, odo.y_m))
         return v
+
+    def _corner_ahead(self, odo: Odometry) -> bool:
+        """Whether the ring hears something close ahead along the edge: the corner it ends
+        in, not a doorway it passes through."""
+        p, pts = self.p, self.sensor.points
+        if self.s.tangent is None or pts is None:
+            return True
+        tx, ty = _to_robot(self.s.tangent, odo)
+        ok = ~np.isnan(pts[:, 0])
+        x, y = pts[ok, 0], pts[ok, 1]
+        ahead = (x * tx + y * ty) >= np.hypot(x, y) * math.cos(p.corner_ahead_rad)
+        return bool(np.any(ahead & (np.hypot(x, y) < p.corner_ahead_m)))
 
     def _pair(
         self, obs: list[Obstacle], odo: Odometry, prev: tuple[float, float] | None
@@ -432,14 +479,24 @@ class Tracer:
         s.sweep.add(self._scan, self.sensor.history.at(self._scan.stamps_s)[:, 2] if fixed else 0.0)
         if now - s.since < p.sweep_s:
             return Twist(0.0, 0.0, p.sweep_radps)
-        s.settle_tries += 1
         centred = p.centred_meet
+        doubts: list[float] = []
         obs = s.sweep.obstacles(
             odo.heading_rad if fixed else 0.0,
             WIDE_BEND_MERGE_RAD if centred else BENT_WALL_MERGE_RAD,
             bridge=centred,
+            doubts=doubts,
         )
-        fast_ring = s.sweep.firings_per_transducer > p.fast_ring_firings
+        if doubts and p.sweep_again and not s.swept_again:
+            # One deeper reading between two walls: a stray echo, or a doorway too narrow
+            # for the sweep's spacing. Another turn of the turret puts readings between.
+            s.swept_again = True
+            s.since = now
+            return Twist(0.0, 0.0, p.sweep_radps)
+        turns = 2.0 if s.swept_again else 1.0
+        s.swept_again = False
+        s.settle_tries += 1
+        fast_ring = s.sweep.firings_per_transducer / turns > p.fast_ring_firings
         s.sweep = None
         centre = laws.wall_centre if centred else laws.circumcentre
         swept = centre(*obs[:3]) if len(obs) >= 3 else None
@@ -477,7 +534,8 @@ class Tracer:
     def _meet(self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]) -> None:
         s, p = self.s, self.p
         near = [o for o in obs if o.distance_m - obs[0].distance_m <= p.degree_tol_m]
-        bearings = laws.departure_bearings(near)
+        around = place_obstacles(obs, near, p.place_radius_m, p.place_tol_m)
+        bearings = laws.departure_bearings(around)
         deps = sorted((odo.heading_rad + b) % TAU for b in bearings)
         arrival = None
         tangent = s.tangent
@@ -500,12 +558,10 @@ class Tracer:
         k = self.choose(ev)
         self._start_depart(deps[k], odo)
 
-    def _boundary(
-        self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]
-    ) -> None:
+    def _boundary(self, clearance: float, odo: Odometry, now: float, events: list[Event]) -> None:
         s = self.s
         length = self._edge_done(odo, now, "boundary", events)
-        events.append(BoundaryReached(now, odo.x_m, odo.y_m, obs[0].distance_m, length))
+        events.append(BoundaryReached(now, odo.x_m, odo.y_m, clearance, length))
         assert s.tangent is not None
         s.left_meet = None  # the way back leads to it: homing onto it is wanted now
         back = math.atan2(-s.tangent[1], -s.tangent[0])
@@ -558,18 +614,47 @@ class Tracer:
         s.tangent = (math.cos(direction), math.sin(direction))
         s.armed = False
         s.depart_m = self.p.depart_m if distance is None else distance
+        s.sides_seen = -1
         s.approach = None
 
     def _depart(self, obs: list[Obstacle], odo: Odometry) -> tuple[float, float] | Twist | None:
         s, p = self.s, self.p
         err = (s.depart_dir - odo.heading_rad + math.pi) % TAU - math.pi
         gone = math.hypot(odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1])
-        if gone >= s.depart_m and abs(err) < math.radians(15):
+        if gone >= s.depart_m and abs(err) < math.radians(15) and self._sides_seen(obs, err, gone):
             s.behaviour = Behaviour.TRACE
             return None
         if abs(err) > math.radians(10) and gone < 0.02:
             return Twist(0.0, laws.steer_rate(err, self.limits), 0.0)
         return (p.alpha_mps * math.cos(err), p.alpha_mps * math.sin(err))
+
+    def _sides_seen(self, obs: list[Obstacle], err: float, gone: float) -> bool:
+        """Whether tracing may begin this far out along a departure ``err`` off the heading.
+
+        A departure leaves between two obstacles, so the edge's pair lies one on each side of
+        it. From a junction by a doorway the ring's transducers, 22.5 degrees apart, do not
+        see between the jambs: it merges them into one obstacle, and the two closest it
+        reports, a jamb and the wall beside it, lie on one side; tracing them leads along the
+        wall, not through the door. Going on straight until the pair straddles the way (the
+        jambs a few decimetres off are far apart in bearing) takes the robot into the door."""
+        p = self.p
+        if gone >= p.depart_until_sides_m or len(obs) < 2:
+            return True
+        if obs[0].distance_m < p.boundary_clearance_m + 0.1:
+            return True  # something close ahead: the trace law and its boundary rule decide
+        a, b = ((o.bearing_rad - err + math.pi) % TAU - math.pi for o in obs[:2])
+        way = (math.cos(err), math.sin(err))
+        t = laws.edge_tangent(obs[0], obs[1], way)
+        # Their edge must also run along the way: a wall behind on the other side (the
+        # table beside fig14's door) makes a pair that straddles it, of another edge.
+        along = t is not None and t[0] * way[0] + t[1] * way[1] >= math.cos(p.sides_along_rad)
+        # The ring glimpses the far jamb now and then before it holds it: a glimpse
+        # traced from is the jamb-and-wall edge again a cycle later.
+        ok = along and (a > 0.0) != (b > 0.0)
+        if self.s.sides_seen < 0 and ok:
+            return True  # as almost everywhere: the pair is there at ``depart_m``
+        self.s.sides_seen = self.s.sides_seen + 1 if ok else 0
+        return self.s.sides_seen >= p.sides_cycles
 
 
 def _to_odom(t: tuple[float, float], odo: Odometry) -> tuple[float, float]:

@@ -56,6 +56,7 @@ SWITCHES = (
     "sweep_fixed_frame",
     "home_hold",
     "held_no_support",
+    "place",
 )
 
 
@@ -66,9 +67,10 @@ def tracer_params(switches: list[str]) -> TracerParams:
         raise UserError(f"no tracer switch {unknown[0]!r}; the switches: {', '.join(SWITCHES)}")
     on = set(switches)
     sensing = SensingParams(held_no_support="held_no_support" in on)
-    flags = {k: True for k in on if k not in ("home_hold", "held_no_support")}
+    flags = {k: True for k in on if k not in ("home_hold", "held_no_support", "place")}
     hold = {"home_hold_m": 0.15} if "home_hold" in on else {}
-    return TracerParams(sensing=sensing, **flags, **hold)
+    place = {"place_radius_m": 0.4} if "place" in on else {}
+    return TracerParams(sensing=sensing, **flags, **hold, **place)
 
 
 def _run(args: argparse.Namespace) -> int:
