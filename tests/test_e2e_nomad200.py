@@ -37,8 +37,8 @@ DRIFT = "paper"
 #: the run from the first meet point on. fig12 without drift, 900 s each, measured with the
 #: same code (stop 26: doorways, doubtful sweeps): in process seeds 2, 10, 11, 12 of 0-12
 #: complete, and 14, 15, 17, 20, 28, 31, 33-37, 39 of 13-40; through both emulators, of those
-#: 16, seeds 31 and 33; through the Nomad 200's alone, of 2, 10, 11 and 12, seed 12. Where both
-#: are right, a difference is the path's.
+#: 16, seeds 31 and 33; through the Nomad 200's alone, of 2, 10, 11 and 12, seeds 2 and 12.
+#: Where both are right, a difference is the path's.
 EXPLORE_SEEDS = {"nomad200-emulated": 12, COMPOSED: 33}
 EXPLORE_DRIFT = "none"
 MATCH_M = 0.75

@@ -11,8 +11,8 @@ import pytest
 from hal.interfaces import NOMAD200_LIMITS
 from hal.types import Odometry
 from tests.test_explorer_split import drive, meet
+from tests.tracer_paths import STOP25
 from tslam.core.explorer import Explorer
-from tslam.core.tracer import TracerParams
 from tslam.programs.sim_cmd import explore
 
 
@@ -68,8 +68,9 @@ def test_a_turn_at_the_junction_that_fits_no_departure_is_lost_not_guessed():
 def test_fig12_departure_not_held_at_m2_is_recognised_and_the_map_completes():
     """fig12 seed 2: at 407 s the departure from m2 towards the cut corner is not held; the
     robot comes back through m2 and traces the known edge to m1. Without the walk back it
-    mapped m1 again from an unexplored port and never closed the map (265 duplicates)."""
-    run = explore("fig12", 2, "paper", duration_s=700.0, progress=False)
+    mapped m1 again from an unexplored port and never closed the map (265 duplicates).
+    With stop 25's tracer (``tests.tracer_paths``)."""
+    run = explore("fig12", 2, "paper", duration_s=700.0, progress=False, tracer_params=STOP25)
     ex = run.explorer
     assert any("not held: back through" in n.text for n in ex.notes), ex.notes
     assert ex.done and not ex.map.unexplored()
@@ -80,17 +81,10 @@ def test_fig16_weak_meet_points_passed_without_homing_still_give_the_whole_map()
     """fig16 seed 3: back from the indent's dead end the robot passes both weak meet points
     and homes only at the corridor's end; the walk puts that on the unexplored departure.
 
-    With stop 25's tracer: stop 26's (doorways, doubtful sweeps) moves the robot otherwise,
-    and of fig16 seeds 1-15 at drift paper none passes two weak meet points and still maps
-    the whole corridor in 900 s (three pass them, and get lost; scratch loop, the calls
-    below). The walk is the explorer's: the tracer only has to give it this path."""
-    stop25 = TracerParams(
-        depart_until_sides_m=0.0,
-        corner_ahead_m=math.inf,
-        corner_ahead_rad=math.pi,
-        sweep_again=False,
-    )
-    run = explore("fig16", 3, "paper", duration_s=900.0, progress=False, tracer_params=stop25)
+    With stop 25's tracer (``tests.tracer_paths``): of fig16 seeds 1-15 at drift paper none
+    passes two weak meet points and still maps the whole corridor in 900 s with stop 26's
+    (three pass them, and get lost; scratch loop, the calls below)."""
+    run = explore("fig16", 3, "paper", duration_s=900.0, progress=False, tracer_params=STOP25)
     ex = run.explorer
     assert any("went through node(s) 2, 1 without homing" in n.text for n in ex.notes)
     assert not any(n.text.startswith("lost (expected") for n in ex.notes), ex.notes

@@ -1,0 +1,22 @@
+"""The tracer some explorer tests were found with, for the paths they need.
+
+Several explorer tests replay one simulated run in which the explorer met a case (a departure
+not held, weak meet points passed unhomed, a mirror image): the explorer's handling is what
+they test, and the tracer only has to take the robot along that path. Stop 26's tracer changes
+(doorways, doubtful sweeps) move the robot otherwise, so these tests keep stop 25's tracer.
+"""
+
+from __future__ import annotations
+
+import math
+
+from tslam.core.tracer import TracerParams
+
+#: Stop 25's tracer: tracing from 0.15 m out of a departure whatever the ring sees, an edge
+#: ended wherever a wall comes within 0.45 m, and one sweep at every meet point.
+STOP25 = TracerParams(
+    depart_until_sides_m=0.0,
+    corner_ahead_m=math.inf,
+    corner_ahead_rad=math.pi,
+    sweep_again=False,
+)
