@@ -111,7 +111,9 @@ class TracerParams:
     # to 112 with the ring's +/-11 degrees each).
     corner_ahead_m: float = 1.0
     corner_ahead_rad: float = math.radians(25.0)
-    pinch_clearance_m: float = 0.3  # ... or the gap is too narrow to pass anyway
+    # ... or the gap is too narrow to pass anyway (a Nomad ring reads nothing under 0.38 m, so
+    # there the bumper answers first; a ring that reads closer ends the edge here).
+    pinch_clearance_m: float = 0.3
     depart_m: float = 0.15  # leave a meet point along its departure before tracing
     # ... and on along it, up to this far, until the ring sees the edge's two obstacles on
     # either side of the way: through a doorway the ring's first view merges the two jambs
