@@ -365,8 +365,9 @@ class Tracer:
         tx, ty = _to_robot(self.s.tangent, odo)
         ok = ~np.isnan(pts[:, 0])
         x, y = pts[ok, 0], pts[ok, 1]
-        ahead = (x * tx + y * ty) >= np.hypot(x, y) * math.cos(p.corner_ahead_rad)
-        return bool(np.any(ahead & (np.hypot(x, y) < p.corner_ahead_m)))
+        r = np.hypot(x, y)
+        ahead = (x * tx + y * ty) >= r * math.cos(p.corner_ahead_rad)
+        return bool(np.any(ahead & (r < p.corner_ahead_m)))
 
     def _pair(
         self, obs: list[Obstacle], odo: Odometry, prev: tuple[float, float] | None

@@ -48,16 +48,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=_run)
 
 
-#: The tracer's switches (TracerParams, SensingParams), each off by default.
-SWITCHES = (
-    "centred_meet",
-    "course_sign",
-    "rejected_memory",
-    "sweep_fixed_frame",
-    "home_hold",
-    "held_no_support",
-    "place",
-)
+#: The tracer's switches, each off by default: the TracerParams fields each sets (a flag set
+#: True, or a distance that turns the behaviour on); ``held_no_support`` is SensingParams'.
+_SETS: dict[str, dict[str, bool | float]] = {
+    "centred_meet": {"centred_meet": True},
+    "course_sign": {"course_sign": True},
+    "rejected_memory": {"rejected_memory": True},
+    "sweep_fixed_frame": {"sweep_fixed_frame": True},
+    "home_hold": {"home_hold_m": 0.15},
+    "held_no_support": {},
+    "place": {"place_radius_m": 0.4},
+}
+SWITCHES = tuple(_SETS)
 
 
 def tracer_params(switches: list[str]) -> TracerParams:
@@ -67,10 +69,8 @@ def tracer_params(switches: list[str]) -> TracerParams:
         raise UserError(f"no tracer switch {unknown[0]!r}; the switches: {', '.join(SWITCHES)}")
     on = set(switches)
     sensing = SensingParams(held_no_support="held_no_support" in on)
-    flags = {k: True for k in on if k not in ("home_hold", "held_no_support", "place")}
-    hold = {"home_hold_m": 0.15} if "home_hold" in on else {}
-    place = {"place_radius_m": 0.4} if "place" in on else {}
-    return TracerParams(sensing=sensing, **flags, **hold, **place)
+    fields = {k: v for name in sorted(on) for k, v in _SETS[name].items()}
+    return TracerParams(sensing=sensing, **fields)
 
 
 def _run(args: argparse.Namespace) -> int:
