@@ -16,6 +16,7 @@ from sim_backend.ground_truth import compute_gvg
 from sim_backend.world import PolygonWorld, StartPose
 from tslam.core.sweep import WIDE_BEND_MERGE_RAD, Sweep, sweep_minima
 from tslam.core.tracer import MeetPointReached, Tracer
+from tslam.programs.trace_cmd import tracer_params
 
 
 def _ring(step_deg: float = 5.0) -> np.ndarray:
@@ -199,10 +200,13 @@ def test_one_deeper_reading_makes_the_sweep_doubtful_and_twice_the_readings_deci
     assert len(sweep_minima(b, d, doubts=doubts)) == 1 and len(doubts) == 1
 
 
-def test_the_tracer_finds_no_meet_point_at_fig12s_cut_corner():
+@pytest.mark.parametrize("switches", [[], ["hold_on"]])
+def test_the_tracer_finds_no_meet_point_at_fig12s_cut_corner(switches):
+    """With ``hold_on`` too: homing that held on near a point its sweep had rejected came
+    back to the cut corner every few seconds for minutes (8 meet points in 900 s)."""
     backend = create_backend({"backend": "sim", "world": "fig12", "seed": 1, "drift": "paper"})
     true_meets = [(n.x, n.y) for n in compute_gvg(backend.world).nodes if n.kind == "meet"]
-    tracer = Tracer(backend.limits)
+    tracer = Tracer(backend.limits, tracer_params(switches))
     robot = backend.robot
     offs: list[float] = []
     with backend:
@@ -241,8 +245,9 @@ def test_one_reading_off_a_plateau_does_not_cut_the_wall_out():
 
 def test_a_bend_whose_faces_read_61_degrees_apart_is_one_wall():
     """fig12's cut corner (a 45-degree bend) read 61 degrees apart from a meet point's
-    sweep, each face's plateau cut short at the bend; the faces are one wall within the
-    wider join of the tracer's centred_meet, and a room's corner still two walls."""
+    sweep, each face's plateau cut short at the bend; the faces are one wall (the readings
+    between show a shallow bend's vertex, or within the wider join of the tracer's
+    centred_meet), and a room's corner still two walls."""
     b = _ring(5.6)
     deg = np.degrees(b)
     d = np.full(len(b), np.inf)
@@ -250,7 +255,33 @@ def test_a_bend_whose_faces_read_61_degrees_apart_is_one_wall():
     d[(deg > 217) & (deg < 230)] = 1.58  # the bend's vertex, a little farther
     d[(deg >= 230) & (deg <= 282)] = 1.44
     assert len(sweep_minima(b, d)) == 2
+    assert len(sweep_minima(b, d, shallow=True)) == 1
     assert len(sweep_minima(b, d, WIDE_BEND_MERGE_RAD)) == 1
+    d[(deg > 217) & (deg < 230)] = 1.75  # a vertex this deep is a bend of some 65 degrees
+    assert len(sweep_minima(b, d, shallow=True)) == 2
+    d[(deg > 217) & (deg < 230)] = 1.58
     d[(deg >= 175) & (deg <= 217)] = np.inf
     d[(deg >= 150) & (deg <= 190)] = 1.46  # 90 degrees from the other wall
+    d[(deg > 217) & (deg < 230)] = 2.05  # a square corner's vertex, 1.41 times as far
     assert len(sweep_minima(b, d, WIDE_BEND_MERGE_RAD)) == 2
+    assert len(sweep_minima(b, d, shallow=True)) == 2
+
+
+def test_a_wall_cut_into_pieces_by_dropouts_is_one_obstacle_when_joined():
+    """fig13's meet point 5, swept 2 cm off it: one wall answered at 72, 77 and 83 degrees
+    with no echo at 80, so its pieces held two readings and one, too short to count; with
+    ``silent`` they are one run. A piece beside a whole run is not joined to it (that moved
+    the run's middle), and a reading with an echo beyond the plateau still ends a run."""
+    b = np.radians([40.0, 61.0, 72.0, 77.0, 80.0, 83.0, 94.0, 120.0])
+    d = np.array([np.inf, np.inf, 1.28, 1.28, np.inf, 1.25, 2.67, np.inf])
+    assert sweep_minima(b, d) == []
+    (wall,) = sweep_minima(b, d, silent=True)
+    assert wall.distance_m == pytest.approx(1.28) and math.degrees(wall.bearing_rad) == (
+        pytest.approx(77.5)
+    )
+    d[4] = 2.6  # an echo from beyond: a view past two obstacles, not a dropout
+    assert sweep_minima(b, d, silent=True) == []
+    b = np.radians([60.0, 100.0, 105.0, 110.0, 115.0, 120.0, 160.0])
+    d = np.array([np.inf, 1.40, 1.40, 1.41, np.inf, 1.40, np.inf])
+    (wall,) = sweep_minima(b, d, silent=True)
+    assert math.degrees(wall.bearing_rad) == pytest.approx(105.0)

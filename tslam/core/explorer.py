@@ -483,14 +483,17 @@ class Explorer:
             split = self._missed_junction(ev, f, j, e, length)
             if split is not None:
                 return split
-        # Homed past a weak meet point: one edge further than planned (section V-B).
+        # Homed past a weak meet point: one edge further than planned (section V-B). The
+        # robot then came by w's edge, so the way back leads to w, whatever f is: back from
+        # a dead end it is a meet point (fig13 seed 1: past meet point 8 to 9, and lost).
         found = []
+        seen_past = self._seen(ev, a, w)
         for p, e2 in enumerate(self.map.node(w).ports):
             if e2 is None or p == q:
                 continue
             e2d = self.map.edge(e2)
             w2, q2 = e2d.other_end(w, p)
-            k2 = self._match(seen, a, w2, q2, length, edge.length_m + e2d.length_m)
+            k2 = self._match(seen_past, a, w2, q2, length, edge.length_m + e2d.length_m)
             if k2 is not None:
                 found.append((w2, k2))
         if len(found) == 1:

@@ -49,6 +49,11 @@ WIDE_BEND_MERGE_RAD = math.radians(70.0)
 #: single deeper reading makes the sweep *doubtful*, and the tracer sweeps once more.
 MIN_VIEW_READINGS = 2
 MIN_VIEW_RAD = math.radians(5.0)
+#: Further apart than ``merge_rad``, two runs are still one bent wall up to this angle if
+#: the readings between them show a shallow bend's vertex: no deeper than this ratio, which
+#: a concave bend of about 55 degrees between normals gives (1 / cos 27.5).
+BENT_WALL_MAX_RAD = math.radians(90.0)
+SHALLOW_BEND_RATIO = 1.12
 
 
 class Sweep:
@@ -92,12 +97,20 @@ class Sweep:
         merge_rad: float = BENT_WALL_MERGE_RAD,
         bridge: bool = False,
         doubts: list[float] | None = None,
+        silent: bool = False,
+        shallow: bool = False,
     ) -> list[Obstacle]:
-        """The obstacles seen, in the frame of a robot heading ``heading_rad``; ``doubts``
+        """The obstacles seen, in the frame of a robot heading ``heading_rad``; the options
         as for ``sweep_minima``."""
         bearing = np.asarray(self._bearing) - heading_rad
         return sweep_minima(
-            bearing, np.asarray(self._dist), merge_rad, bridge=bridge, doubts=doubts
+            bearing,
+            np.asarray(self._dist),
+            merge_rad,
+            bridge=bridge,
+            doubts=doubts,
+            silent=silent,
+            shallow=shallow,
         )
 
 
@@ -112,6 +125,8 @@ def sweep_minima(
     min_run_rad: float = math.radians(8.0),
     bridge: bool = False,
     doubts: list[float] | None = None,
+    silent: bool = False,
+    shallow: bool = False,
 ) -> list[Obstacle]:
     """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
 
@@ -120,11 +135,15 @@ def sweep_minima(
     are grown from the lowest reading up. With ``bridge`` a run reaches over one reading off
     its plateau to the next one on it: a dropout, or another transducer's echo from a side
     lobe or the far wall at the same bearing, cuts a wall's run into pieces too short to
-    count otherwise, and a junction's third wall goes unseen.
+    count otherwise, and a junction's third wall goes unseen. With ``silent`` (and without
+    ``bridge``) pieces too short to count are joined over readings with no echo between
+    them: at fig13's meet point 5, 2 cm off it, dropouts cut two of its three walls into
+    pieces of one and two readings, and the sweep rejected the point.
 
     Two runs joined as one bent wall although a deeper reading lies between them add the
     bearing of that view to ``doubts``: more readings there would tell a stray echo from a
-    doorway.
+    doorway. With ``shallow`` two runs up to 90 degrees apart are one wall if the readings
+    between them show a shallow bend's vertex (``_shallow_bend``).
     """
     n = len(bearing_rad)
     if n < 3:
@@ -137,36 +156,14 @@ def sweep_minima(
     # degrees, a fast ring's many a fraction of one.
     fewest = max(min_samples, math.ceil(min_run_rad * n / (2 * math.pi)))
     runs: list[tuple[float, float, int, int]] = []  # distance, mid bearing, lo, hi
+    short: list[tuple[int, float]] = []  # runs too short to count: seed reading, limit
     for run_id, i in enumerate(np.argsort(d, kind="stable")):
         if not math.isfinite(d[i]):
             break
         if claimed[i] >= 0:
             continue
         limit = d[i] + tol_m + tol_rel * d[i]
-        lo = hi = int(i)
-        slope = False
-        while hi - lo + 1 < n:
-            k = (hi + 1) % n
-            if claimed[k] >= 0:
-                slope = True
-                break
-            if d[k] > limit:
-                if bridge and _on_plateau(d, claimed, (k + 1) % n, limit, hi - lo + 2 < n):
-                    hi += 2
-                    continue
-                break
-            hi += 1
-        while hi - lo + 1 < n:
-            k = (lo - 1) % n
-            if claimed[k] >= 0:
-                slope = True
-                break
-            if d[k] > limit:
-                if bridge and _on_plateau(d, claimed, (k - 1) % n, limit, hi - lo + 2 < n):
-                    lo -= 2
-                    continue
-                break
-            lo -= 1
+        lo, hi, slope = _grow(d, claimed, int(i), limit, bridge, False)
         idx = np.array([k % n for k in range(lo, hi + 1)])
         member = idx[d[idx] <= limit]
         claimed[idx] = run_id
@@ -175,12 +172,27 @@ def sweep_minima(
             # over some 25 degrees of axis. A run of one or two is a stray echo, and so is a
             # side lobe's run on a ring that fires fast: it answers half its firings at
             # random, so its runs hold several samples, but only a few degrees' worth.
+            if not slope and len(member) < fewest:
+                short.append((int(i), limit))
             continue
-        # The middle of the plateau: the mean of its end bearings, unwrapped across 0.
-        first, last = b[idx[0]], b[idx[-1]]
-        span = (last - first) % (2 * math.pi)
-        mid = first + 0.5 * span
-        runs.append((float(np.median(d[member])), mid, lo % n, hi % n))
+        runs.append(_run(b, d, idx, member, lo, hi))
+    if silent and not bridge and short:
+        # A run too short to count may be a wall that dropouts cut into pieces (no echo
+        # between readings on one plateau). Only such pieces are joined, after every run
+        # that counts on its own has its readings: reaching over a dropout from a piece
+        # into a whole run moved that run's middle, and fig12's cut corner read as two
+        # walls 62 degrees apart.
+        free = np.isin(claimed, [-1] + [int(claimed[i]) for i, _ in short])
+        open_ = np.where(free, -1, claimed)
+        for i, limit in short:
+            if open_[i] >= 0:
+                continue
+            lo, hi, slope = _grow(d, open_, i, limit, False, True)
+            idx = np.array([k % n for k in range(lo, hi + 1)])
+            member = idx[d[idx] <= limit]
+            open_[idx] = n + i
+            if not slope and len(idx) < n and len(member) >= fewest:
+                runs.append(_run(b, d, idx, member, lo, hi))
     if not runs:
         return []
     # Neighbouring runs on one bent wall join, in chains (a side-lobe fragment, the wall,
@@ -197,7 +209,7 @@ def sweep_minima(
     # Every neighbouring pair, counter-clockwise: with two runs that is both arcs between them.
     for k in range(m if m > 1 else 0):
         a, c = runs[k], runs[(k + 1) % m]
-        one = _one_wall(a, c, d, merge_rad, bend_ratio)
+        one = _one_wall(a, c, d, merge_rad, bend_ratio, shallow)
         if one is not False:
             parent[root((k + 1) % m)] = root(k)
         if one is None and doubts is not None:
@@ -214,9 +226,67 @@ def sweep_minima(
     return out
 
 
+def _run(
+    b: np.ndarray, d: np.ndarray, idx: np.ndarray, member: np.ndarray, lo: int, hi: int
+) -> tuple[float, float, int, int]:
+    """A run as (distance, mid bearing, lo, hi): the middle of the plateau is the mean of
+    its end bearings, unwrapped across 0."""
+    n = len(d)
+    first, last = b[idx[0]], b[idx[-1]]
+    mid = first + 0.5 * ((last - first) % (2 * math.pi))
+    return float(np.median(d[member])), mid, lo % n, hi % n
+
+
+def _grow(
+    d: np.ndarray, claimed: np.ndarray, i: int, limit: float, bridge: bool, silent: bool
+) -> tuple[int, int, bool]:
+    """The run of readings within ``limit`` around reading ``i``, as (lo, hi) indices
+    (unwrapped), and whether it borders another run (a slope). ``bridge`` reaches over one
+    reading off the plateau, ``silent`` over one with no echo."""
+    n = len(d)
+    lo = hi = i
+    slope = False
+    for step in (1, -1):
+        while hi - lo + 1 < n:
+            k = (hi + 1) % n if step > 0 else (lo - 1) % n
+            if claimed[k] >= 0:
+                # A run claimed it first, from a lower reading: this one is its slope. Joining
+                # pieces (``silent``) comes after every run, so only a lower neighbour counts.
+                slope = slope or not silent or d[k] <= limit
+                break
+            if d[k] > limit:
+                over = bridge or (silent and not math.isfinite(d[k]))
+                if over and _on_plateau(d, claimed, (k + step) % n, limit, hi - lo + 2 < n):
+                    if step > 0:
+                        hi += 2
+                    else:
+                        lo -= 2
+                    continue
+                break
+            if step > 0:
+                hi += 1
+            else:
+                lo -= 1
+    return lo, hi, slope
+
+
 def _on_plateau(d: np.ndarray, claimed: np.ndarray, k: int, limit: float, room: bool) -> bool:
     """Whether reading ``k``, just past one off the plateau, is on it again."""
     return room and claimed[k] < 0 and d[k] <= limit
+
+
+def _shallow_bend(d: np.ndarray, k: int, end: int, far: float) -> bool:
+    """Whether the readings from ``k`` up to ``end`` show the vertex of a shallow concave
+    bend between two faces at most ``far`` away: echoes all the way, none deeper than a bend
+    of some 50 degrees would give. Each face answers only on its own side of the bend, so
+    the middles of their plateaus lie wider apart than their normals: fig12's 45-degree cut
+    corner read 62 and 71 degrees apart once dropouts no longer cut one face out (``silent``).
+    A square corner's vertex is 1.41 times as far as its walls, and between two obstacles
+    of a meet point the view goes past them."""
+    n = len(d)
+    between = d[[(k + j) % n for j in range((end - k) % n)]]
+    seen = between[np.isfinite(between)]
+    return len(seen) >= MIN_VIEW_READINGS and bool(np.all(seen <= SHALLOW_BEND_RATIO * far))
 
 
 def _one_wall(
@@ -225,15 +295,19 @@ def _one_wall(
     d: np.ndarray,
     merge_rad: float,
     bend_ratio: float,
+    shallow: bool = False,
 ) -> bool | None:
     """``c`` follows ``a`` counter-clockwise; could the two be one bent wall? None: yes, but
     a view between them too narrow to count was seen (a stray echo, or a narrow doorway)."""
-    if (c[1] - a[1]) % (2 * math.pi) >= merge_rad:
+    sep = (c[1] - a[1]) % (2 * math.pi)
+    if sep >= (BENT_WALL_MAX_RAD if shallow else merge_rad):
         return False
     if max(a[0], c[0]) > bend_ratio * min(a[0], c[0]):
         return False  # a flat bend's two faces are about equally far
     n = len(d)
     k, end = (a[3] + 1) % n, c[2]
+    if sep >= merge_rad:
+        return _shallow_bend(d, k, end, max(a[0], c[0]))
     limit = bend_ratio * max(a[0], c[0])
     # A view past the bend is some degrees wide; one stray reading is not (an outlier, and a
     # ring that fires fast sweeps hundreds of readings, outliers among them). Each reading

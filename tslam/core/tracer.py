@@ -101,6 +101,14 @@ class TracerParams:
     # explorations' outcomes no better (README, tracing): off for now.
     centred_meet: bool = False
     home_patience_s: float = 1.0  # with centred_meet
+    # A seventh set, the switch ``hold_on``: homing holds on through a lost third echo up
+    # to ``home_hold_m`` 0.6, a sweep joins a wall's pieces that dropouts cut too short to
+    # count, and it takes two faces up to 90 degrees apart for one bent wall where the
+    # readings between show a shallow bend (sweep.py). It homes onto junctions the ring does
+    # not resolve (fig13's meet points 0 and 5), but the trace metrics are mixed and the
+    # benches no better (README, tracing): off for now.
+    sweep_join_pieces: bool = False
+    sweep_shallow_bend: bool = False
     sensing: SensingParams = field(default_factory=SensingParams)
     boundary_clearance_m: float = 0.45  # the edge has run into its corner ...
     # ... if the corner is there: an echo this close ahead, within this angle of the way. A
@@ -201,6 +209,10 @@ class _State:
     # side, as at fig12's cut corner), such a ring proposes one close by afresh every cycle,
     # and the robot would sweep there for minutes: the next try must be clear of it.
     rejected: bool = False
+    # On any ring: where a sweep last rejected a point (odometry frame). Homing does not
+    # hold on through a lost echo (``home_hold_m``) near it: it came back to fig12's cut
+    # corner every few seconds for minutes, each time to be rejected again.
+    rejected_at: tuple[float, float] | None = None
     left_meet: tuple[float, float] | None = None  # the meet point reported last, left by an edge
     # Where homing began and the edge's tangent there: near a junction the two closest
     # obstacles may belong to another of its edges, so the tangent the trace law keeps while
@@ -451,13 +463,18 @@ class Tracer:
             held = s.home_target
             if held is not None and p.centred_meet and now - s.home_seen < p.home_patience_s:
                 target = _to_robot((held[0] - odo.x_m, held[1] - odo.y_m), odo)
-            elif held is not None and math.hypot(held[0] - odo.x_m, held[1] - odo.y_m) < (
-                p.home_hold_m
+            elif (
+                held is not None
+                and math.hypot(held[0] - odo.x_m, held[1] - odo.y_m) < p.home_hold_m
+                and (
+                    s.rejected_at is None
+                    or math.dist(held, s.rejected_at) >= p.rejected_meet_m
+                )
             ):
-                # One cycle without the third echo a few centimetres from the point is a
-                # dropout, not proof that there is no meet point: let the sweep judge it.
-                # Giving up here traced on through fig12's m1, never homed onto.
-                target = (0.0, 0.0)
+                # One cycle without the third echo near the point is a dropout, not proof
+                # that there is no meet point: go on to where it was, and let the sweep judge
+                # it. Giving up here traced on through fig12's m1, never homed onto.
+                target = _to_robot((held[0] - odo.x_m, held[1] - odo.y_m), odo)
             else:
                 # Not a meet point after all (or a bad estimate): back to tracing.
                 s.behaviour = Behaviour.TRACE
@@ -489,6 +506,8 @@ class Tracer:
             WIDE_BEND_MERGE_RAD if centred else BENT_WALL_MERGE_RAD,
             bridge=centred,
             doubts=doubts,
+            silent=p.sweep_join_pieces,
+            shallow=p.sweep_shallow_bend,
         )
         if doubts and p.sweep_again and not s.swept_again:
             # One deeper reading between two walls: a stray echo, or a doorway too narrow
@@ -505,6 +524,10 @@ class Tracer:
         swept = centre(*obs[:3]) if len(obs) >= 3 else None
         if swept is not None and math.hypot(*swept) > p.converge_tol_m and s.settle_tries < 3:
             s.behaviour = Behaviour.HOME
+            # Home on the sweep's estimate: the ring may not resolve the third obstacle
+            # at all (a cabinet's corner 45 degrees from a wall, fig13's meet point 0).
+            s.home_target = _add(_to_odom(swept, odo), odo)
+            s.home_seen = now
             return None
         s.settle_tries = 0
         if centred and swept is not None and math.hypot(*swept) <= p.converge_tol_m:
@@ -522,6 +545,7 @@ class Tracer:
             near = swept is not None and (not centred or math.hypot(*swept) <= p.meet_radius_m)
             s.last_meet = _add(_to_odom(swept, odo), odo) if near else (odo.x_m, odo.y_m)
             s.rejected = fast_ring
+            s.rejected_at = (odo.x_m, odo.y_m)
             # On the way it came in: while homing, the trace law's tangent swings between
             # the pairs of nearly equidistant walls, and at fig12's cut corner it had swung
             # round, so the robot went back down the edge it had come up. At fig16's weak
@@ -536,6 +560,7 @@ class Tracer:
 
     def _meet(self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]) -> None:
         s, p = self.s, self.p
+        s.rejected_at = None
         near = [o for o in obs if o.distance_m - obs[0].distance_m <= p.degree_tol_m]
         around = place_obstacles(obs, near, p.place_radius_m, p.place_tol_m)
         bearings = laws.departure_bearings(around)

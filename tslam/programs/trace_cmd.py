@@ -58,6 +58,7 @@ _SETS: dict[str, dict[str, bool | float]] = {
     "home_hold": {"home_hold_m": 0.15},
     "held_no_support": {},
     "place": {"place_radius_m": 0.4},
+    "hold_on": {"home_hold_m": 0.6, "sweep_join_pieces": True, "sweep_shallow_bend": True},
 }
 SWITCHES = tuple(_SETS)
 
