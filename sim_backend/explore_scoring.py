@@ -9,6 +9,11 @@ Coverage is judged on *places*: true meet points joined by an edge shorter than
 on one pass and as two on another, and homes onto whichever it reaches first), and an edge
 between two of them is not one to find. A map covers the world when it holds every place and
 an edge between every two places the true GVG joins (boundary points are places of their own).
+
+An edge of the map between two places the true GVG does not join is *wrong*: the robot traced
+past a junction without homing there, or took the node it arrived at for another. A wrong edge
+is no merge, but it is how most copies begin: the old node whose departure it occupies is never
+a candidate again when the robot comes to it by the true edge.
 """
 
 from __future__ import annotations
@@ -102,6 +107,7 @@ def score_exploration(
     )
     n_links = sum(true_links.values())
     found_links = sum(min(n, mapped_links[link]) for link, n in true_links.items())
+    wrong = sum(n for link, n in mapped_links.items() if len(link) == 2 and link not in true_links)
     false_merges = 0
     for record in merges:
         for _, _, td, tr in record:
@@ -128,6 +134,7 @@ def score_exploration(
         "found_place_edges": found_links,
         "covered": found_places == true_places and found_links == n_links,
         "map_edges": len(edges),
+        "wrong_edges": wrong,
         "loop_closures_true": cycle_rank(len(gvg_nodes), gvg_edges, gvg_nodes),
         "loop_closures_found": cycle_rank(
             len(map_ids), [(e["u"], e["v"]) for e in edges], map_ids

@@ -49,6 +49,7 @@ def _row(world="fig12", drift="paper", seed=1, **over):
         "loop_closures_true": 2,
         "loop_closures_found": 2,
         "duplicate_nodes": 0,
+        "wrong_edges": 0,
         "found_meet_points": 3,
         "true_meet_points": 3,
         "found_edges": 6,

@@ -69,3 +69,26 @@ def test_a_junction_seen_as_one_where_two_meet_points_are_close_still_covers(gvg
     # Without the edges that went on from v, the place is there but the map is not whole.
     s2 = score_exploration(g, _map_of(g, skip_nodes={v}), [])
     assert s2["found_places"] == s2["true_places"] and not s2["covered"]
+
+
+def test_an_edge_traced_past_a_junction_is_a_wrong_edge(gvgs):
+    """fig12: an edge from one meet point to a node two edges on (the junction between
+    passed without homing) joins two places the true GVG does not; the true map has none,
+    and an edge within a close pair's place is no wrong edge either."""
+    g = gvgs["fig12"]
+    assert score_exploration(g, _map_of(g), [])["wrong_edges"] == 0
+    nbrs = {n.id: set() for n in g.nodes}
+    for e in g.edges:
+        nbrs[e.u].add(e.v)
+        nbrs[e.v].add(e.u)
+    a = next(n.id for n in g.meet_points)
+    far = next(c for b in nbrs[a] for c in nbrs[b] if c != a and c not in nbrs[a])
+    m = _map_of(g)
+    m["edges"].append({"u": a, "v": far, "length_m": 5.0})
+    assert score_exploration(g, m, [])["wrong_edges"] == 1
+    f16 = gvgs["fig16"]
+    place = places(f16)
+    u, v = next((e.u, e.v) for e in f16.edges if e.u != e.v and place[e.u] == place[e.v])
+    m16 = _map_of(f16)
+    m16["edges"].append({"u": u, "v": v, "length_m": 0.3})
+    assert score_exploration(f16, m16, [])["wrong_edges"] == 0
