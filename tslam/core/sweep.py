@@ -278,7 +278,7 @@ def _on_plateau(d: np.ndarray, claimed: np.ndarray, k: int, limit: float, room: 
 def _shallow_bend(d: np.ndarray, k: int, end: int, far: float) -> bool:
     """Whether the readings from ``k`` up to ``end`` show the vertex of a shallow concave
     bend between two faces at most ``far`` away: echoes all the way, none deeper than a bend
-    of some 50 degrees would give. Each face answers only on its own side of the bend, so
+    of some 55 degrees would give. Each face answers only on its own side of the bend, so
     the middles of their plateaus lie wider apart than their normals: fig12's 45-degree cut
     corner read 62 and 71 degrees apart once dropouts no longer cut one face out (``silent``).
     A square corner's vertex is 1.41 times as far as its walls, and between two obstacles

@@ -101,7 +101,7 @@ class TracerParams:
     # explorations' outcomes no better (README, tracing): off for now.
     centred_meet: bool = False
     home_patience_s: float = 1.0  # with centred_meet
-    # A seventh set, the switch ``hold_on``: homing holds on through a lost third echo up
+    # An eighth, the switch ``hold_on`` (stop 27): homing holds on through a lost third echo up
     # to ``home_hold_m`` 0.6, a sweep joins a wall's pieces that dropouts cut too short to
     # count, and it takes two faces up to 90 degrees apart for one bent wall where the
     # readings between show a shallow bend (sweep.py). It homes onto junctions the ring does
