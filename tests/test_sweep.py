@@ -203,7 +203,7 @@ def test_one_deeper_reading_makes_the_sweep_doubtful_and_twice_the_readings_deci
 @pytest.mark.parametrize("switches", [[], ["hold_on"]])
 def test_the_tracer_finds_no_meet_point_at_fig12s_cut_corner(switches):
     """With ``hold_on`` too: homing that held on near a point its sweep had rejected came
-    back to the cut corner every few seconds for minutes (8 meet points in 900 s)."""
+    back to the cut corner every few seconds for minutes (11 meet points in 900 s, not 12)."""
     backend = create_backend({"backend": "sim", "world": "fig12", "seed": 1, "drift": "paper"})
     true_meets = [(n.x, n.y) for n in compute_gvg(backend.world).nodes if n.kind == "meet"]
     tracer = Tracer(backend.limits, tracer_params(switches))
