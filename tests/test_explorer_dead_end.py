@@ -76,32 +76,33 @@ def test_a_whole_map_explored_is_complete():
     assert ex.done and ex.notes[-1].text == "exploration complete: 2 nodes, 1 edges"
 
 
+def past_the_junction(c_clearance: float) -> tuple[Explorer, int, int, int, int]:
+    """Junction J at (0, 0), dead end B 1.5 m east of it, meet point C 2 m along J's 120 deg
+    edge (clearance ``c_clearance``); the robot, back from B, homes where C is after 3.5 m.
+    The explorer, J, B, C and the node the arrival was taken for."""
+    ex = Explorer(NOMAD200_LIMITS)
+    j = ex.map.add_meet(0.9, [0.0, math.radians(120), math.radians(240)], (0.0, 0.0))
+    b = ex.map.add_boundary(0.4, (1.5, 0.0))
+    c = ex.map.add_meet(c_clearance, [math.radians(a) for a in (60, 180, 300)], (-1.0, 1.73))
+    ex.map.connect(j, 0, b, 0, 1.5)
+    ex.map.connect(j, 1, c, 2, 2.0)
+    ex.leaving = (b, 0)
+    node, _ = ex._arrive(meet(-1.0, 1.73, [60, 180, 300], 300, 3.5))
+    return ex, j, b, c, node
+
+
 def test_back_from_a_dead_end_through_the_junction_unhomed_is_one_edge_further():
     """Back from dead end B the robot goes through junction J without homing and homes at C,
     J's neighbour: it came in by C's edge from J, a meet point, whatever B is. fig13 seed 1
     went lost there (past meet point 8 to 9 at 259 s), for the way back read as leading to a
     boundary point."""
-    ex = Explorer(NOMAD200_LIMITS)
-    j = ex.map.add_meet(0.9, [0.0, math.radians(120), math.radians(240)], (0.0, 0.0))
-    b = ex.map.add_boundary(0.4, (1.5, 0.0))
-    c = ex.map.add_meet(0.9, [math.radians(a) for a in (60, 180, 300)], (-1.0, 1.73))
-    ex.map.connect(j, 0, b, 0, 1.5)
-    ex.map.connect(j, 1, c, 2, 2.0)
-    ex.leaving = (b, 0)
-    node, _ = ex._arrive(meet(-1.0, 1.73, [60, 180, 300], 300, 3.5))
+    ex, j, _, c, node = past_the_junction(0.9)
     assert node == c and len(ex.map.nodes()) == 3
     assert ex.notes[-1].text == f"expected node {j}, recognised node {c} one edge further"
 
 
 def test_one_edge_further_still_needs_the_signature():
     """The same, but C is read with another clearance: not C, and the robot is lost."""
-    ex = Explorer(NOMAD200_LIMITS)
-    j = ex.map.add_meet(0.9, [0.0, math.radians(120), math.radians(240)], (0.0, 0.0))
-    b = ex.map.add_boundary(0.4, (1.5, 0.0))
-    c = ex.map.add_meet(1.4, [math.radians(a) for a in (60, 180, 300)], (-1.0, 1.73))
-    ex.map.connect(j, 0, b, 0, 1.5)
-    ex.map.connect(j, 1, c, 2, 2.0)
-    ex.leaving = (b, 0)
-    node, _ = ex._arrive(meet(-1.0, 1.73, [60, 180, 300], 300, 3.5))
+    ex, j, b, c, node = past_the_junction(1.4)
     assert node not in (j, b, c)
     assert ex.notes[-1].text.startswith(f"lost (expected node {j}")
