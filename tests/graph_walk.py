@@ -60,6 +60,7 @@ def walk(
     seed: int = 1,
     misread: Callable[[str, int | None, int], list[float] | None] | None = None,
     lost_at: Collection[int] = (),
+    passed: Callable[[str, int, int], int | None] | None = None,
 ) -> list[str]:
     """Run the explorer over ``graph`` from ``start``; returns the true nodes visited.
 
@@ -68,11 +69,16 @@ def walk(
 
     ``misread(node, true arrival port, visits so far)`` may return other bearings (degrees,
     true frame) for the tracer to report at that arrival: a junction read with an edge more
-    or fewer. Departure indices then map to the true ports by nearest bearing."""
+    or fewer. Departure indices then map to the true ports by nearest bearing.
+
+    ``passed(node, true arrival port, passes so far)`` may return the port by which the robot
+    goes on through that meet point without homing there (a junction the ring does not
+    resolve); the tracer then reports the node beyond, with both edges' length."""
     rng = random.Random(seed)
     heading_err = 0.0
     at, came_by, length = start, arrival_port, None
-    visited = []
+    visited: list[str] = []
+    gone_through: list[str] = []
     where = [graph.nodes[at][3], graph.nodes[at][4]]  # what the truth callback reports
     explorer.truth = lambda: (where[0], where[1])
     for _ in range(max_arrivals):
@@ -100,6 +106,13 @@ def walk(
         port = true_port[k]
         nxt, nport, length = graph.ends[(at, port)]
         length *= 1.0 + rng.uniform(-noise, noise)
+        while passed is not None and graph.nodes[nxt][0] == "meet":
+            out = passed(nxt, nport, gone_through.count(nxt))
+            if out is None:
+                break
+            gone_through.append(nxt)
+            nxt, nport, more = graph.ends[(nxt, out)]
+            length += more * (1.0 + rng.uniform(-noise, noise))
         heading_err += math.radians(drift_deg_per_edge)
         if graph.nodes[nxt][0] == "boundary":
             bx, by = graph.nodes[nxt][3], graph.nodes[nxt][4]
@@ -142,3 +155,12 @@ def _angdiff(a: float, b: float) -> float:
 
 def _nearest(deps: tuple[float, ...], bearing: float) -> int:
     return min(range(len(deps)), key=lambda i: _angdiff(deps[i], bearing))
+
+
+def straight_on(graph: TrueGraph, node: str, came_by: int) -> int:
+    """The port of ``node`` most nearly opposite the one the robot came in by."""
+    deps = graph.nodes[node][2]
+    ahead = deps[came_by] + math.pi
+    return min(
+        (p for p in range(len(deps)) if p != came_by), key=lambda p: _angdiff(deps[p], ahead)
+    )

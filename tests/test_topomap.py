@@ -181,6 +181,19 @@ def test_remove_node_frees_the_far_ports():
     assert m.changes[-1].op == "node_removed" and m.changes[-1].data["edges"] == [1, 2]
 
 
+def test_remove_edge_frees_both_ports_and_says_so():
+    m = TopoMap()
+    nodes = first_lap(m)
+    (n1, p1), (n2, p2) = nodes[0], nodes[1]
+    e = m.node(n1).ports[p1["next"]]
+    m.remove_edge(e)
+    assert not m.has_edge(e) and m.has_node(n1) and m.has_node(n2)
+    assert {(n1, p1["next"]), (n2, p2["prev"])} <= set(m.unexplored())
+    assert m.changes[-1].op == "edge_removed" and m.changes[-1].data == {"edge": e}
+    with pytest.raises(MapError, match=f"no edge {e}"):
+        m.remove_edge(e)
+
+
 # -- signatures -----------------------------------------------------------------------------
 
 

@@ -47,6 +47,7 @@ import enum
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 import networkx as nx
 
@@ -66,7 +67,7 @@ from tslam.core.localize import (
 from tslam.core.placements import Placement, other_placements, placements
 from tslam.core.portmap import PortMap, match_by_angle
 from tslam.core.signature import Signature
-from tslam.core.topomap import Likeness, MapError, MergePlan, Step, TopoMap
+from tslam.core.topomap import EdgeConflictError, Likeness, MapError, MergePlan, Step, TopoMap
 from tslam.core.tracer import (
     Behaviour,
     BoundaryReached,
@@ -83,6 +84,8 @@ TAU = 2.0 * math.pi
 # the way is tested by a few; fig15's aisles are fitted by dozens at once, none of which
 # implies the rest, and trying them all at every arrival took seconds per arrival.
 FOLD_MAX = 4
+# Edges a hypothesis may say went past a junction (``Explorer._past_a_junction``).
+MAX_CUTS = 2
 
 
 class Mode(enum.Enum):
@@ -150,6 +153,23 @@ class ExplorerParams:
     # A hypothesis's crowd counts every old node that looks like the new one, even those whose
     # departure the robot came by is already explored (``Explorer._crowd``).
     crowd_all_ports: bool = True
+    # Edges that went past a junction without homing there: a hypothesis whose prediction
+    # failed on the edge's length alone, as such an edge explains, is kept; a new node may
+    # be an old one whose departure the robot came by is explored by such an edge; a merge
+    # that would make such an edge one with a shorter one takes it out instead of being
+    # refused. The edge goes from the map when the hypothesis is merged
+    # (``Explorer._past_a_junction``, ``_past_candidates``, ``_cut_conflicts``).
+    cut_past: bool = True
+    # A merge keeps the hypotheses about the fragment's other nodes (``Explorer._carry_over``).
+    carry_over: bool = True
+
+
+class Past(NamedTuple):
+    """A failed prediction explained by a junction passed without homing: ``beyond`` is
+    the old node (and rotation) this traversal reached past the predicted one, or None if
+    the map's edge went past the meet point just reached."""
+
+    beyond: tuple[int, int] | None
 
 
 @dataclass(frozen=True)
@@ -643,6 +663,7 @@ class Explorer:
         # What each open hypothesis predicted for this edge, checked before the map changes.
         survivors: list[Hypothesis] = []
         confirmed: list[tuple[Hypothesis, int, int]] = []
+        past: list[tuple[Hypothesis, tuple[int, int] | None]] = []
         for h in self.hyps.live:
             pred = predict(self.map, h, f, j)
             if pred is None:
@@ -654,6 +675,11 @@ class Explorer:
             if k is not None and all(c != pred.node for c, _ in h.mapping.values()):
                 survivors.append(h)
                 confirmed.append((h, pred.node, k))
+            elif k is None and self.p.cut_past:
+                went = self._past_a_junction(h, pred, seen, a, length)
+                if went is not None:
+                    survivors.append(h)
+                    past.append((h, went.beyond))
         node = self._add_meet(ev)
         edge = self.map.connect(f, j, node, a, 0.0 if length is None else length)
         lv = self._last_visit
@@ -662,8 +688,17 @@ class Explorer:
         for h, w, k in confirmed:
             h.mapping[node] = (w, k)
             h.confirmed += 1
+        for h, went in past:
+            if went is None:  # the old edge went past this junction
+                pred = predict(self.map, h, f, j)
+                assert pred is not None and pred.edge is not None
+                h.cuts.add(pred.edge)
+            else:  # this edge went past the predicted node to the one beyond
+                h.cuts.add(edge)
+                h.mapping[node] = went
         dropped = len(self.hyps.live) - len(survivors)
-        self.hyps.live = self._age(survivors, {id(h) for h, _, _ in confirmed})
+        spoke = {id(h) for h, _, _ in confirmed} | {id(h) for h, _ in past}
+        self.hyps.live = self._age(survivors, spoke)
         if self.hyps.live:
             self.hyps.fragment.add(node)
         fresh = candidates(self.map, self.map.signature(node), tol, self.hyps.fragment | {node}, a)
@@ -674,21 +709,98 @@ class Explorer:
         crowd = self._crowd(node, fresh)
         for c, k in fresh:
             self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd))
-        if fresh:
+        past = self._past_candidates(f, node, a, edge, length) if self.p.cut_past else []
+        past = [(c, k, e) for c, k, e in past if (c, k) not in implied]
+        for c, k, e in past:
+            self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd, cuts={e}))
+        if fresh or past:
             self.hyps.fragment.add(node)
         leads = self._lead_ins(f, j, node, a, length) if self.p.lead_ins else []
         leads = [h for h in leads if h.mapping[node] not in implied]
         for h in leads:
             self.hyps.live.append(h)
             self.hyps.fragment.add(node)
-        if dropped or fresh or leads:
+        if dropped or fresh or leads or past:
             self._note(
                 f"node {node}: {len(fresh)} look-alike(s), "
+                + (f"{len(past)} if an edge went past a junction, " if past else "")
                 + (f"{len(leads)} if node {f} is mapped twice, " if leads else "")
                 + f"{dropped} hypothesis(es) refuted, {len(self.hyps.live)} open"
             )
         self.partial_m = 0.0
         return node, 0
+
+    def _past_a_junction(
+        self, h: Hypothesis, pred: Prediction, seen: Signature, a: int, length: float | None
+    ) -> Past | None:
+        """A prediction that failed on its edge's length, explained by a junction passed
+        without homing (section VII-B's weak meet points, a third wall the ring does not
+        resolve): most wrong predictions of true hypotheses are that, and a refuted true
+        hypothesis leaves the fragment a copy for good. Shorter than the map's edge: that
+        edge went past the meet point just reached. Longer: this traversal went past the
+        predicted node, and reached the one beyond it that fits, alone, by signature and the
+        two edges' length. None if neither, or if ``h`` already says ``MAX_CUTS`` other edges
+        went past a junction: a repair or two is an explanation, more is a story.
+        """
+        if length is None or pred.edge is None:
+            return None
+        if len(h.cuts) >= MAX_CUTS and pred.edge not in h.cuts:
+            return None
+        tol = self._tol()
+        slack = tol.length_abs_m + tol.length_rel * pred.length_m
+        if length < pred.length_m - slack:
+            return Past(None)
+        if length <= pred.length_m + slack + (tol.wandered_m if tol.at_least else 0.0):
+            return None
+        if len(h.cuts) >= MAX_CUTS:
+            return None
+        w = self.map.node(pred.node)
+        if w.kind != "meet":
+            return None
+        beyond = []
+        for p, e2 in enumerate(w.ports):
+            if e2 is None or p == pred.arrival_port:
+                continue
+            edge2 = self.map.edge(e2)
+            w2, q2 = edge2.other_end(pred.node, p)
+            two = Prediction(w2, q2, pred.length_m + edge2.length_m, self.map.node(w2).kind)
+            k2 = arrival_matches(self.map, seen, a, two, length, tol)
+            if k2 is not None and all(c != w2 for c, _ in h.mapping.values()):
+                beyond.append((w2, k2))
+        return Past(beyond[0]) if len(beyond) == 1 else None
+
+    def _past_candidates(
+        self, f: int, node: int, a: int, edge: int, length: float | None
+    ) -> list[tuple[int, int, int]]:
+        """Old places the new ``node`` may be although the departure the robot came by is
+        explored there, by an edge whose length says one of the two went past a junction
+        without homing: (old node, rotation, the edge that went past). Longer than the
+        length just measured: the old edge went past ``f``, the meet point just left (fig13:
+        meet points 1 and 2 joined past meet point 0, which the robot then reached by its
+        third edge). Shorter: the edge just traced went past the old edge's far end. The
+        first tracing's look-alike is otherwise never a candidate, and the place is mapped
+        again, with copies of everything beyond it."""
+        if length is None or self.map.node(f).kind != "meet":
+            return []
+        tol = self._tol()
+        alike = candidates(
+            self.map, self.map.signature(node), tol, self.hyps.fragment | {node}, None
+        )
+        out = []
+        for c, k in alike:
+            pa = (a + k) % self.map.node(c).degree
+            e = self.map.node(c).ports[pa]
+            if e is None or e == edge or not self._heading_fits(node, c, k):
+                continue
+            old = self.map.edge(e)
+            slack = tol.length_abs_m + tol.length_rel * max(length, old.length_m)
+            if length < old.length_m - slack:
+                out.append((c, k, e))
+            elif length > old.length_m + slack:
+                far = old.other_end(c, pa)[0]
+                if self.map.node(far).kind == "meet":
+                    out.append((c, k, edge))
+        return out
 
     def _crowd(self, node: int, fresh: list[tuple[int, int]]) -> int:
         """How many old places ``node`` may be, for the odds of each: its candidates, or,
@@ -862,7 +974,7 @@ class Explorer:
             return {}
         # A hypothesis no prediction has tested yet is in the same position as "all of it is
         # new": possible, unrefuted, unsupported. Only tested hypotheses compete.
-        tested = [h for h in self.hyps.live if h.tested]
+        tested = self._tested()
         if 1 < len(tested) <= FOLD_MAX and self.p.fold_implied:
             tested = self._fold_implied(tested)
         if len(tested) == 1 and tested[0].proven(self.p.merge_evidence, self.p.weigh_crowd):
@@ -888,7 +1000,9 @@ class Explorer:
             # The evidence fits elsewhere as well: those places are hypotheses too, with the
             # same support, for the next moves to separate, or the ambiguity to record.
             for placement in rivals:
-                self.hyps.live.append(replace(h, mapping=dict(placement), silent_arrivals=0))
+                self.hyps.live.append(
+                    replace(h, mapping=dict(placement), silent_arrivals=0, cuts=set(h.cuts))
+                )
             if rivals:
                 self._note(
                     f"node {node}: the evidence also fits {len(rivals)} other place(s): "
@@ -896,7 +1010,7 @@ class Explorer:
                         ", ".join(f"{x}={c}" for x, (c, _) in sorted(pl.items())) for pl in rivals
                     )
                 )
-            tested = [h for h in self.hyps.live if h.tested]
+            tested = self._tested()
         if node in self.hyps.fragment and separating_port(self.map, self.hyps, node) is not None:
             return {}
         if len(tested) == 1:
@@ -908,14 +1022,27 @@ class Explorer:
         self._abandon_hypotheses()
         return {}
 
+    def _tested(self) -> list[Hypothesis]:
+        """The hypotheses that compete for a merge: those some prediction has tested. One
+        that says an edge went past a junction starts less likely than one that needs no
+        such slip, so it competes with those only once it has more confirmations than any
+        of them; until then it waits, and neither blocks a merge nor makes an ambiguity."""
+        tested = [h for h in self.hyps.live if h.tested]
+        plain = [h for h in tested if not h.cuts]
+        if not plain:
+            return tested
+        best = max(h.confirmed for h in plain)
+        return plain + [h for h in tested if h.cuts and h.confirmed > best]
+
     def _other_placements(self, h: Hypothesis) -> tuple[list[Placement], bool] | None:
         """``other_placements`` of ``h``'s fragment, in the map as ``h``'s claims about old
         nodes (a lead-in: an old node is a copy of another) would make it: there the copies
         are one place, and a placement on a copy is no rival."""
+        view = self._view(h)
         old = {x: ck for x, ck in h.mapping.items() if x not in self.hyps.fragment}
         if not old:
-            return other_placements(self.map, h, self.p.tol, fits=self._heading_fits)
-        merged = self._merged_copy(old)
+            return other_placements(view, h, self.p.tol, fits=self._heading_fits)
+        merged = self._merged_copy(old, view)
         if merged is None:
             return [], False
         trial, renamed = merged
@@ -934,7 +1061,7 @@ class Explorer:
         if there is one (``tslam.core.zipmerge``); else all of them, still rivals."""
         proven = [h for h in tested if h.proven(self.p.merge_evidence, self.p.weigh_crowd)]
         for h in sorted(proven, key=lambda h: -(h.confirmed + 0.5 * h.dead_ends)):
-            merged = self._merged_copy(h.mapping)
+            merged = self._merged_copy(h.mapping, self._view(h))
             if merged is not None and all(
                 implies(*merged, o.mapping) for o in tested if o is not h
             ):
@@ -942,11 +1069,11 @@ class Explorer:
         return tested
 
     def _merged_copy(
-        self, mapping: dict[int, tuple[int, int]]
+        self, mapping: dict[int, tuple[int, int]], base: TopoMap | None = None
     ) -> tuple[TopoMap, dict[int, tuple[int, int]]] | None:
-        """A copy of the map with ``mapping`` merged, and the renames; None if the map
-        refuses the merge."""
-        trial = self.map.copy()
+        """A copy of the map (or of ``base``) with ``mapping`` merged, and the renames; None
+        if the map refuses the merge."""
+        trial = (self.map if base is None else base).copy()
         try:
             return trial, merge_mapping(trial, mapping, self._likeness())
         except MapError:
@@ -1008,7 +1135,7 @@ class Explorer:
         merged back (tests/test_explorer_graph.py)."""
         # Only hypotheses some prediction has confirmed count: a look-alike whose departures
         # are all unexplored could not be tested yet, which is no ambiguity.
-        tested = [h for h in self.hyps.live if h.tested]
+        tested = self._tested()
         self.doubtful |= self.hyps.fragment
         for x in sorted(self.hyps.fragment):
             if not self.map.has_node(x):
@@ -1018,18 +1145,69 @@ class Explorer:
                 continue
             self.map.set_ambiguous(x, others)
             for p, e in enumerate(self.map.node(x).ports):
-                if not lost and e is None and all(
-                    (img := h.image_port(self.map, x, p)) is not None
-                    and self.map.node(img[0]).ports[img[1]] is not None
-                    for h in tested
-                    if x in h.mapping
+                if (
+                    not lost
+                    and e is None
+                    and all(
+                        (img := h.image_port(self.map, x, p)) is not None
+                        and self.map.node(img[0]).ports[img[1]] is not None
+                        for h in tested
+                        if x in h.mapping
+                    )
                 ):
                     self.frozen.add((x, p))
             self._note(f"node {x} is ambiguous with {sorted(others)}: not merged")
         self.hyps.clear()
 
+    def _view(self, h: Hypothesis) -> TopoMap:
+        """The map as ``h`` says it is: without the edges it found went past a junction."""
+        cuts = sorted(e for e in h.cuts if self.map.has_edge(e))
+        if not cuts:
+            return self.map
+        view = self.map.copy()
+        for e in cuts:
+            view.remove_edge(e)
+        return view
+
+    def _cut_conflicts(self, h: Hypothesis) -> TopoMap | None:
+        """The map ``h`` merges into: without the edges it says went past a junction, and
+        without any edge its merge would make one with a shorter edge to a meet point (the
+        first tracing went past that meet point: fig13's meet point 0, whose third wall the
+        ring rarely resolves, joined meet points 1 and 2 by one 4.3 m edge). None, with a
+        note, if the map refuses the merge anyway."""
+        while True:
+            view = self._view(h)
+            try:
+                merge_mapping(view.copy(), h.mapping, self._likeness())
+                return view
+            except EdgeConflictError as exc:
+                e = self._went_past(view, exc.edges) if self.p.cut_past else None
+                if e is None or len(h.cuts) >= MAX_CUTS:
+                    self._note(f"merge refused by the map ({exc}): keeping both")
+                    return None
+                h.cuts.add(e)
+            except MapError as exc:
+                self._note(f"merge refused by the map ({exc}): keeping both")
+                return None
+
+    def _went_past(self, view: TopoMap, edges: tuple[int, int]) -> int | None:
+        """Of two edges a merge makes one, the longer, if it is longer than the length
+        tolerance allows and the shorter joins two meet points: it went past a junction."""
+        a, b = (view.edge(e) for e in edges)
+        long, short = (a, b) if a.length_m > b.length_m else (b, a)
+        tol = self._tol()
+        if long.length_m - short.length_m <= tol.length_abs_m + tol.length_rel * long.length_m:
+            return None
+        if any(view.node(n).kind != "meet" for n in (short.u, short.v)):
+            return None
+        return long.id
+
     def _merge(self, h: Hypothesis) -> dict[int, tuple[int, int]]:
-        loop = self._false_loop(h)
+        view = self._cut_conflicts(h)
+        if view is None:
+            self._abandon_hypotheses()
+            return {}
+        loop = self._false_loop(h, view)
         if loop is not None:
             e, gap = loop
             self._note(
@@ -1038,6 +1216,8 @@ class Explorer:
             )
             self._abandon_hypotheses()
             return {}
+        if view is not self.map:
+            self._remove_cuts(h)
         pairs = []
         truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
 
@@ -1055,28 +1235,75 @@ class Explorer:
             "loop closed: " + ", ".join(f"{d}={r}" for d, r, _, _ in pairs) + f"; {self._size()}"
         )
         self._apply_renames(renamed)
-        self.hyps.clear()
+        self._carry_over(h, renamed)
         return renamed
 
-    def _false_loop(self, h: Hypothesis) -> tuple[int, float] | None:
+    def _remove_cuts(self, h: Hypothesis) -> None:
+        """Take out the edges ``h`` says went past a junction. A node left with no edge at
+        all (the first one the robot mapped, its only edge the one that went past) holds
+        nothing but a look: the place is mapped elsewhere, and its departures lead nowhere
+        the robot could go, so it goes too."""
+        cuts = sorted(e for e in h.cuts if self.map.has_edge(e))
+        ends = set()
+        for e in cuts:
+            edge = self.map.edge(e)
+            ends |= {edge.u, edge.v}
+            self.map.remove_edge(e)
+            self.edge_gap.pop(e, None)
+        self._note(f"edge(s) {', '.join(map(str, cuts))} went past a junction: removed")
+        busy = {self.here, self.goal, None if self.leaving is None else self.leaving[0]}
+        busy |= set(h.mapping) | {c for c, _ in h.mapping.values()}
+        for n in sorted(ends - busy):
+            if self.map.has_node(n) and all(e is None for e in self.map.node(n).ports):
+                self.map.remove_node(n)
+                self.hyps.fragment.discard(n)
+                self._note(f"node {n}, left with no edge, removed")
+
+    def _carry_over(self, merged: Hypothesis, renamed: dict[int, tuple[int, int]]) -> None:
+        """After a merge, the hypotheses about the fragment's other nodes go on, renamed. A
+        merge used to drop every other hypothesis: of a fragment two copies long (fig13, the
+        robot come round the room twice), the merge of one copy left the other a copy for
+        good, though a hypothesis had it right. A hypothesis about a node the merge took is
+        a rival, refuted by the merge's proof, and goes."""
+        keep = []
+        for h in self.hyps.live if self.p.carry_over else []:
+            if h is merged:
+                continue
+            mapping = {}
+            for x, (c, k) in h.mapping.items():
+                rc, sc = renamed.get(c, (c, 0))
+                if x in renamed or x == rc or not self.map.has_node(x):
+                    break
+                mapping[x] = (rc, (k + sc) % self.map.node(rc).degree)
+            else:
+                if mapping:
+                    keep.append(replace(h, mapping=mapping, cuts=set(h.cuts)))
+        fragment = {x for x in self.hyps.fragment if x not in renamed and self.map.has_node(x)}
+        self.hyps.clear()
+        if keep:
+            self.hyps.live = keep
+            self.hyps.fragment = fragment
+
+    def _false_loop(self, h: Hypothesis, view: TopoMap | None = None) -> tuple[int, float] | None:
         """An edge the merge of ``h`` would make a loop although dead reckoning, good over
-        one edge, put its two ends apart; None if there is none."""
+        one edge, put its two ends apart; None if there is none. ``view``: the map ``h``
+        merges into (``_view``)."""
         p = self.p
+        view = self._view(h) if view is None else view
         far = {
             e: gap
             for e, gap in self.edge_gap.items()
-            if self.map.has_edge(e)
-            and gap > p.loop_gap_m + p.loop_gap_rel * self.map.edge(e).length_m
+            if view.has_edge(e) and gap > p.loop_gap_m + p.loop_gap_rel * view.edge(e).length_m
         }
         if not far:
             return None
-        trial = copy.deepcopy(self.map)
+        trial = copy.deepcopy(view)
         try:
             renamed = merge_mapping(trial, h.mapping, self._likeness())
         except MapError:
             return None  # the map refuses it anyway, and says why
         for e, gap in sorted(far.items()):
-            ends = self.map.edge(e)
+            ends = view.edge(e)
             if renamed.get(ends.u, (ends.u, 0))[0] == renamed.get(ends.v, (ends.v, 0))[0]:
                 return e, gap
         return None

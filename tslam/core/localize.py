@@ -72,6 +72,10 @@ class Hypothesis:
     # look-alikes (duplicates of a lab's junctions, fig15's aisles) needs that much more
     # evidence before one candidate is as good as proven.
     crowd: int = 1
+    # Map edges this hypothesis says went past a junction without homing there: an old edge
+    # its fragment found a meet point partway along, or a fragment edge that went past an
+    # old node to the one beyond. They go from the map when the hypothesis is merged.
+    cuts: set[int] = field(default_factory=set)
 
     @property
     def tested(self) -> bool:
@@ -81,8 +85,9 @@ class Hypothesis:
         """Enough evidence to merge, if no other hypothesis is left. Dead ends count half,
         and a hypothesis that began off the graph needs one confirmation more: mirror-image
         corridors (fig16) agree on dead ends, and a node reached off the graph was matched on
-        its signature alone. With ``weigh_crowd``, a crowd of look-alikes asks for more."""
-        need = merge_evidence + (1 if self.lost_start else 0)
+        its signature alone. With ``weigh_crowd``, a crowd of look-alikes asks for more. Each
+        edge it says went past a junction asks for one more: that is a slip it assumes."""
+        need = merge_evidence + (1 if self.lost_start else 0) + len(self.cuts)
         if weigh_crowd:
             need += crowd_evidence(self.crowd)
         return self.confirmed >= 1 and self.confirmed + 0.5 * self.dead_ends >= need
@@ -108,6 +113,7 @@ class Prediction:
     arrival_port: int
     length_m: float
     kind: str
+    edge: int | None = None  # the map edge it follows
 
 
 @dataclass
@@ -158,11 +164,11 @@ def predict(tmap: TopoMap, h: Hypothesis, node: int, port: int) -> Prediction | 
         return None
     c, pc = img
     e = tmap.node(c).ports[pc]
-    if e is None:
+    if e is None or e in h.cuts:
         return None
     edge = tmap.edge(e)
     w, q = edge.other_end(c, pc)
-    return Prediction(w, q, edge.length_m, tmap.node(w).kind)
+    return Prediction(w, q, edge.length_m, tmap.node(w).kind, e)
 
 
 def arrival_matches(

@@ -41,6 +41,14 @@ class MapError(ValueError):
     """An operation the map refuses because the map would contradict itself."""
 
 
+class EdgeConflictError(MapError):
+    """A merge would make two edges of different lengths one."""
+
+    def __init__(self, message: str, edges: tuple[int, int]) -> None:
+        super().__init__(message)
+        self.edges = edges
+
+
 class MapFormatError(ValueError):
     """A serialised map that cannot be read; the message names the field, node or edge."""
 
@@ -116,7 +124,9 @@ class Change:
     """One numbered map change; ``data`` is plain JSON (ids, numbers, node/edge dicts)."""
 
     seq: int
-    op: str  # node_added, edge_added, measurement, merge, ambiguity, node_removed, edge_split
+    # node_added, edge_added, measurement, merge, ambiguity, node_removed, edge_split,
+    # edge_removed
+    op: str
     data: dict[str, Any]
 
 
@@ -375,6 +385,13 @@ class TopoMap:
         self._record("edge_split", {"edge": e, "node": mid, "into": into})
         return a.id, b.id
 
+    def remove_edge(self, e: int) -> None:
+        """Forget an edge found to have gone past a junction without homing there: its
+        two ports become unexplored again."""
+        self.edge(e)
+        self._drop_edge(e)
+        self._record("edge_removed", {"edge": e})
+
     def add_measurement(self, edge: int, length_m: float) -> None:
         """Another encoder length for a retraced edge; the estimate is their median."""
         e = self.edge(edge)
@@ -485,9 +502,10 @@ class TopoMap:
                     # e2 is e1, so their far ends are one (node, port) too.
                     l1, l2 = self._edges[e1].length_m, self._edges[e2].length_m
                     if alike is not None and not alike.lengths_agree(l1, l2):
-                        raise MapError(
+                        raise EdgeConflictError(
                             f"merging {drop} into {keep} would make edge {e2} ({l2:.2f} m) "
-                            f"edge {e1} ({l1:.2f} m)"
+                            f"edge {e1} ({l1:.2f} m)",
+                            (e1, e2),
                         )
                     o2, q2 = self._edges[e2].other_end(*self._end(e2, end2))
                     learnt |= identify(o1, o2, q1 - q2)
