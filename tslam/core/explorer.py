@@ -162,6 +162,10 @@ class ExplorerParams:
     cut_past: bool = True
     # A merge keeps the hypotheses about the fragment's other nodes (``Explorer._carry_over``).
     carry_over: bool = True
+    # A meet point found partway along a known edge, with no recent pass to say which of its
+    # departures leads on, goes into the map, and the rest of the edge is forgotten, rather
+    # than passed as a weak meet point that is no node of the map (``_junction_on_edge``).
+    split_open: bool = True
 
 
 class Past(NamedTuple):
@@ -491,6 +495,16 @@ class Explorer:
             return w, pm
         short = length is not None and length < edge.length_m - tol.length_abs_m
         through = self._through_port(ev) if short else None
+        if short and not self.disturbed:
+            assert length is not None
+            split = self._missed_junction(ev, f, j, e, length)
+            room = edge.length_m - length >= self.p.split_rest_m  # else the far end itself
+            # Back from a dead end the way in was just traced: the pass says it, or nothing.
+            room = room and self.map.node(f).kind == "meet"
+            if split is None and room and self.p.split_open:
+                split = self._junction_on_edge(ev, f, j, e, length)
+            if split is not None:
+                return split
         if through is not None:
             # A weak meet point halfway (section VII-B): it did not show when the edge was
             # first traced. Not a node of the map; the edge goes on straight ahead.
@@ -498,11 +512,6 @@ class Explorer:
             self._through = through
             self._note(f"weak meet point passed on edge {e} ({f}-{w})")
             return f, 0
-        if short and not self.disturbed:
-            assert length is not None
-            split = self._missed_junction(ev, f, j, e, length)
-            if split is not None:
-                return split
         # Homed past a weak meet point: one edge further than planned (section V-B). The
         # robot then came by w's edge, so the way back leads to w, whatever f is: back from
         # a dead end it is a meet point (fig13 seed 1: past meet point 8 to 9, and lost).
@@ -531,6 +540,29 @@ class Explorer:
             f"{ev.clearance_m:.2f} m after {length or 0:.2f} m"
         )
         return self._lost(ev, why)
+
+    def _junction_on_edge(
+        self, ev: MeetPointReached, f: int, j: int, e: int, length: float
+    ) -> tuple[int, int]:
+        """A junction partway along known edge ``e``, with no recent pass to say which of its
+        departures leads on: the edge went past it. It goes into the map as a new node at
+        the end of the stretch just traced, and the rest of ``e`` is forgotten: its far end's
+        departure is to explore again, and so are the junction's. Which of them leads on is
+        not guessed (straight on is not always it: fig1's meet point 8 turns 61 degrees).
+        Before, the junction was passed as a weak meet point, no node of the map, and the
+        branch beyond it was never mapped."""
+        a = ev.arrival_index
+        assert a is not None
+        w = self.map.edge(e).other_end(f, j)[0]
+        kept = [h for h in self.hyps.live if not (f in h.mapping and w in h.mapping)]
+        self.hyps.live = kept
+        self.map.remove_edge(e)
+        self.edge_gap.pop(e, None)
+        self._note(
+            f"a junction {length:.2f} m along edge {e} ({f}-{w}), which went past it: the edge "
+            "is removed"
+        )
+        return self._new_edge(ev, self._seen(ev, a, f), f, j, length)
 
     def _missed_junction(
         self, ev: MeetPointReached, f: int, j: int, e: int, length: float
@@ -1011,7 +1043,7 @@ class Explorer:
                     )
                 )
             tested = self._tested()
-        if node in self.hyps.fragment and separating_port(self.map, self.hyps, node) is not None:
+        if node in self.hyps.fragment and self._separating_port(node) is not None:
             return {}
         if len(tested) == 1:
             if tested[0].resumed:
@@ -1023,16 +1055,24 @@ class Explorer:
         return {}
 
     def _tested(self) -> list[Hypothesis]:
-        """The hypotheses that compete for a merge: those some prediction has tested. One
-        that says an edge went past a junction starts less likely than one that needs no
-        such slip, so it competes with those only once it has more confirmations than any
-        of them; until then it waits, and neither blocks a merge nor makes an ambiguity."""
-        tested = [h for h in self.hyps.live if h.tested]
-        plain = [h for h in tested if not h.cuts]
+        """The hypotheses that compete for a merge: those some prediction has tested."""
+        return [h for h in self._contenders() if h.tested]
+
+    def _contenders(self) -> list[Hypothesis]:
+        """The live hypotheses, but for those set aside. One that says an edge went past a
+        junction starts less likely than one that needs no such slip, so it contends only
+        once it has more confirmations than any of those; until then it waits: it neither
+        blocks a merge nor makes an ambiguity, and no move is made to test it (in fig14's
+        lab, a dozen junctions alike, such tests sent the robot round and round)."""
+        live = self.hyps.live
+        plain = [h for h in live if not h.cuts]
         if not plain:
-            return tested
+            return list(live)
         best = max(h.confirmed for h in plain)
-        return plain + [h for h in tested if h.cuts and h.confirmed > best]
+        return plain + [h for h in live if h.cuts and h.confirmed > best]
+
+    def _separating_port(self, node: int) -> int | None:
+        return separating_port(self.map, Hypotheses(self.hyps.fragment, self._contenders()), node)
 
     def _other_placements(self, h: Hypothesis) -> tuple[list[Placement], bool] | None:
         """``other_placements`` of ``h``'s fragment, in the map as ``h``'s claims about old
@@ -1324,7 +1364,7 @@ class Explorer:
 
     def _next_port(self, node: int, arrival: int | None) -> int | None:
         if self.hyps and node in self.hyps.fragment:
-            p = separating_port(self.map, self.hyps, node)
+            p = self._separating_port(node)
             if p is not None:
                 self.plan = []
                 return p
