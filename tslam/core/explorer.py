@@ -165,10 +165,10 @@ class ExplorerParams:
     # than passed as a weak meet point that is no node of the map (``_junction_on_edge``).
     split_open: bool = True
     # Before calling exploration complete, go back once along every edge between two meet
-    # points traced only once (``Explorer._verify_path``). Off: on the walks of a true graph
-    # with one junction passed unhomed it nearly doubles the maps made right, but on the
-    # simulated benches it completed no run more, and the complete ones drove 2.7 times
-    # the GVG's length instead of 2.2 (the target is 2.5).
+    # points traced only once (``Explorer._verify_path``). Off: on walks of true graphs with
+    # one junction passed unhomed it nearly doubles the maps made right, but in simulation
+    # (paper drift, seeds 1-6) it completed the same runs, four of which then drove 2.5 to
+    # 2.7 times the GVG's length instead of 2.2 to 2.3 (the target is 2.5).
     verify_edges: bool = False
 
 
