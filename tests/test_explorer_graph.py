@@ -167,15 +167,12 @@ def test_a_fragment_left_out_of_reach_by_losing_the_way_is_placed_and_the_map_fi
     # (no move had been found that separates them: there was no move to make), and the map
     # was never complete: "1 departure(s) unexplored in fragments the robot has not placed
     # itself in". It fits one place only, so it is merged there, and exploration ends.
-    # (With stop 28's repairs of edges that went past a junction, ``cut_past``, that walk
-    # takes another way and leaves no fragment out of reach: the test walks it as it was.)
     gvg = compute_gvg(load_world("fig13"))
     graph = from_ground_truth(gvg)
     start = next(n for n, v in graph.nodes.items() if v[0] == "meet")
     runs = {}
     for place in (True, False):
-        params = ExplorerParams(place_orphans=place, cut_past=False)
-        ex = Explorer(NOMAD200_LIMITS, params=params)
+        ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(place_orphans=place))
         walk(graph, ex, start, max_arrivals=200, noise=0.03, seed=2, lost_at=[20, 26])
         runs[place] = ex
         assert not [n.text for n in ex.notes if "ambiguous" in n.text]

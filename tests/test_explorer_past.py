@@ -20,6 +20,7 @@ from tslam.core.localize import Hypothesis
 from tslam.core.tracer import MeetPointReached
 
 TAU = 2 * math.pi
+PAST = ExplorerParams(cut_past=True)  # off by default: see ExplorerParams
 # No two alike under any rotation but the identity, so each test has one reading.
 A_DEPS = [0, 100, 230]  # A: its departure 0 deg leads east
 M_DEPS = [0, 90, 180]  # M: the junction east of A, a branch north
@@ -41,7 +42,7 @@ def test_a_prediction_shorter_than_its_edge_keeps_the_hypothesis_and_cuts_the_ed
     # The map joins A to B by one 4 m edge that went past M. Node X is A again, mapped by a
     # robot that had lost its way; leaving X east it homes onto M after 2 m. Before, the
     # hypothesis X = A was refuted there (B predicted after 4 m), and X stayed a copy.
-    ex = Explorer(NOMAD200_LIMITS)
+    ex = Explorer(NOMAD200_LIMITS, params=PAST)
     a, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.6, B_DEPS, 4.0)
     wrong = ex.map.connect(a, 0, b, 1, 4.0)
     ex.map.connect(b, 0, ex.map.add_boundary(0.4, (5.0, 1.0)), 0, 1.2)
@@ -60,7 +61,7 @@ def test_a_prediction_shorter_than_its_edge_keeps_the_hypothesis_and_cuts_the_ed
 
 
 def test_without_the_repair_that_hypothesis_is_refuted():
-    ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(cut_past=False))
+    ex = Explorer(NOMAD200_LIMITS)  # cut_past is off by default
     a, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.6, B_DEPS, 4.0)
     ex.map.connect(a, 0, b, 1, 4.0)
     x = _add(ex, 1.0, A_DEPS, 20.0)
@@ -75,7 +76,7 @@ def test_a_traversal_longer_than_predicted_that_fits_the_node_beyond_maps_it_the
     # The map has A - M - B right. Leaving X (A again) east, the robot goes past M unhomed
     # and homes onto B after 4.1 m: the hypothesis maps the new node to B, and the edge just
     # traced, which went past M, goes at the merge.
-    ex = Explorer(NOMAD200_LIMITS)
+    ex = Explorer(NOMAD200_LIMITS, params=PAST)
     a, m, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.3, M_DEPS, 2.0), _add(ex, 1.6, B_DEPS, 4.0)
     ex.map.connect(a, 0, m, 2, 2.0)
     ex.map.connect(m, 0, b, 1, 2.0)
@@ -92,7 +93,7 @@ def test_a_traversal_longer_than_predicted_that_fits_the_node_beyond_maps_it_the
 
 
 def test_a_longer_traversal_that_fits_no_node_beyond_still_refutes():
-    ex = Explorer(NOMAD200_LIMITS)
+    ex = Explorer(NOMAD200_LIMITS, params=PAST)
     a, m, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.3, M_DEPS, 2.0), _add(ex, 1.6, B_DEPS, 4.0)
     ex.map.connect(a, 0, m, 2, 2.0)
     ex.map.connect(m, 0, b, 1, 2.0)
@@ -108,7 +109,7 @@ def test_the_old_place_is_a_candidate_although_its_departure_is_explored_by_a_lo
     # fig13: meet points 1 and 2 were joined past meet point 0; the robot then reached 0 by
     # its third edge, and went on to 1. Node 1's departure towards 0 is explored (by the
     # wrong edge), so 1 was no candidate, and was mapped again.
-    ex = Explorer(NOMAD200_LIMITS)
+    ex = Explorer(NOMAD200_LIMITS, params=PAST)
     a, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.6, B_DEPS, 4.0)
     wrong = ex.map.connect(a, 0, b, 1, 4.0)
     m = _add(ex, 1.3, M_DEPS, 2.0)  # reached by its branch north, mapped as new
@@ -121,7 +122,7 @@ def test_the_old_place_is_a_candidate_although_its_departure_is_explored_by_a_lo
 
 
 def test_a_merge_that_would_make_an_edge_one_with_a_shorter_one_cuts_the_longer():
-    ex = Explorer(NOMAD200_LIMITS)
+    ex = Explorer(NOMAD200_LIMITS, params=PAST)
     a, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.6, B_DEPS, 4.0)
     wrong = ex.map.connect(a, 0, b, 1, 4.0)
     x, m = _add(ex, 1.0, A_DEPS, 20.0), _add(ex, 1.3, M_DEPS, 22.0)
@@ -134,7 +135,7 @@ def test_a_merge_that_would_make_an_edge_one_with_a_shorter_one_cuts_the_longer(
 
 
 def test_a_shorter_edge_to_a_dead_end_is_no_junction_passed_and_the_merge_is_refused():
-    ex = Explorer(NOMAD200_LIMITS)
+    ex = Explorer(NOMAD200_LIMITS, params=PAST)
     a, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.6, B_DEPS, 4.0)
     edge = ex.map.connect(a, 0, b, 1, 4.0)
     x = _add(ex, 1.0, A_DEPS, 20.0)

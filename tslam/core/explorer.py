@@ -158,8 +158,12 @@ class ExplorerParams:
     # be an old one whose departure the robot came by is explored by such an edge; a merge
     # that would make such an edge one with a shorter one takes it out instead of being
     # refused. The edge goes from the map when the hypothesis is merged
-    # (``Explorer._past_a_junction``, ``_past_candidates``, ``_cut_conflicts``).
-    cut_past: bool = True
+    # (``Explorer._past_a_junction``, ``_past_candidates``, ``_cut_conflicts``). Off: on
+    # walks of true graphs it makes right three maps in ten that had a junction passed
+    # unhomed, against one without it, but a restart against a stored map of fig12 (the
+    # daemon's, killed after its first edge) then took another way, into a copy of a
+    # junction reached by a departure not held, and never finished.
+    cut_past: bool = False
     # A meet point found partway along a known edge, with no recent pass to say which of its
     # departures leads on, goes into the map, and the rest of the edge is forgotten, rather
     # than passed as a weak meet point that is no node of the map (``_junction_on_edge``).
