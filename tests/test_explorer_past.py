@@ -1,8 +1,10 @@
 """Edges that went past a junction without homing there (a third wall the ring does not
 resolve, section VII-B's weak meet points): the map joins the two places either side of it,
-and that one wrong edge used to refute the true hypotheses that crossed it and keep the place
-itself from ever being a candidate, so the map copied everything beyond (``Explorer._past_a_
-junction``, ``_past_candidates``, ``_cut_conflicts``)."""
+and that one wrong edge refutes the true hypotheses that cross it and keeps the place itself
+from ever being a candidate, so the map copies everything beyond. ``ExplorerParams.cut_past``
+(off by default) repairs such edges (``Explorer._past_a_junction``, ``_past_candidates``,
+``_cut_conflicts``); a junction found partway along a known edge goes into the map
+(``split_open``, on); ``verify_edges`` (off) goes back along edges traced once."""
 
 from __future__ import annotations
 

@@ -750,21 +750,21 @@ class Explorer:
         crowd = self._crowd(node, fresh)
         for c, k in fresh:
             self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd))
-        past = self._past_candidates(f, node, a, edge, length) if self.p.cut_past else []
-        past = [(c, k, e) for c, k, e in past if (c, k) not in implied]
-        for c, k, e in past:
+        slips = self._past_candidates(f, node, a, edge, length) if self.p.cut_past else []
+        slips = [(c, k, e) for c, k, e in slips if (c, k) not in implied]
+        for c, k, e in slips:
             self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd, cuts={e}))
-        if fresh or past:
+        if fresh or slips:
             self.hyps.fragment.add(node)
         leads = self._lead_ins(f, j, node, a, length) if self.p.lead_ins else []
         leads = [h for h in leads if h.mapping[node] not in implied]
         for h in leads:
             self.hyps.live.append(h)
             self.hyps.fragment.add(node)
-        if dropped or fresh or leads or past:
+        if dropped or fresh or leads or slips:
             self._note(
                 f"node {node}: {len(fresh)} look-alike(s), "
-                + (f"{len(past)} if an edge went past a junction, " if past else "")
+                + (f"{len(slips)} if an edge went past a junction, " if slips else "")
                 + (f"{len(leads)} if node {f} is mapped twice, " if leads else "")
                 + f"{dropped} hypothesis(es) refuted, {len(self.hyps.live)} open"
             )
@@ -1215,11 +1215,12 @@ class Explorer:
         return view
 
     def _cut_conflicts(self, h: Hypothesis) -> TopoMap | None:
-        """The map ``h`` merges into: without the edges it says went past a junction, and
-        without any edge its merge would make one with a shorter edge to a meet point (the
-        first tracing went past that meet point: fig13's meet point 0, whose third wall the
-        ring rarely resolves, joined meet points 1 and 2 by one 4.3 m edge). None, with a
-        note, if the map refuses the merge anyway."""
+        """The map ``h`` merges into: without the edges it says went past a junction and,
+        with ``cut_past``, without any edge its merge would make one with a shorter edge
+        between two meet points (the first tracing went past one: fig13's meet point 0,
+        whose third wall the ring rarely resolves, joined meet points 1 and 2 by one 4.3 m
+        edge). None, with a note, if the map refuses the merge. It is tried on a copy, so a
+        refused merge leaves the map as it was (merging the real one could stop halfway)."""
         while True:
             view = self._view(h)
             try:
