@@ -164,9 +164,10 @@ class ExplorerParams:
     # daemon's, killed after its first edge) then took another way, into a copy of a
     # junction reached by a departure not held, and never finished.
     cut_past: bool = False
-    # A meet point found partway along a known edge, with no recent pass to say which of its
-    # departures leads on, goes into the map, and the rest of the edge is forgotten, rather
-    # than passed as a weak meet point that is no node of the map (``_junction_on_edge``).
+    # A meet point found partway along a known edge goes into the map, even with a departure
+    # straight on: placed on the edge by the recent pass if there is one, else the rest of
+    # the edge is forgotten (``_junction_on_edge``). Off, as before stop 28: such a junction
+    # is passed as a weak meet point, no node of the map.
     split_open: bool = True
     # Before calling exploration complete, go back once along every edge between two meet
     # points traced only once (``Explorer._verify_path``). Off: on walks of true graphs with
@@ -506,7 +507,9 @@ class Explorer:
         through = self._through_port(ev) if short else None
         if short and not self.disturbed:
             assert length is not None
-            split = self._missed_junction(ev, f, j, e, length)
+            split = None
+            if self.p.split_open or through is None:
+                split = self._missed_junction(ev, f, j, e, length)
             room = edge.length_m - length >= self.p.split_rest_m  # else the far end itself
             # Back from a dead end the way in was just traced: the pass says it, or nothing.
             room = room and self.map.node(f).kind == "meet"
