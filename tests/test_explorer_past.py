@@ -40,6 +40,24 @@ def _add(ex: Explorer, clr: float, deps: list[float], x: float) -> int:
     return ex.map.add_meet(clr, [math.radians(d) for d in deps], (x, 0.0))
 
 
+def _x_is_a_again(ex: Explorer, a: int) -> tuple[int, Hypothesis]:
+    """Node X, mapped again by a robot that lost its way, tested as A (two confirmations);
+    the robot leaves X by its east departure."""
+    x = _add(ex, 1.0, A_DEPS, 20.0)
+    h = Hypothesis({x: (a, 0)}, confirmed=2)
+    ex.hyps.live, ex.hyps.fragment = [h], {x}
+    ex.leaving = (x, 0)
+    return x, h
+
+
+def _a_m_b(ex: Explorer) -> tuple[int, int, int]:
+    """A - M - B east, 2 m each, mapped right."""
+    a, m, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.3, M_DEPS, 2.0), _add(ex, 1.6, B_DEPS, 4.0)
+    ex.map.connect(a, 0, m, 2, 2.0)
+    ex.map.connect(m, 0, b, 1, 2.0)
+    return a, m, b
+
+
 def test_a_prediction_shorter_than_its_edge_keeps_the_hypothesis_and_cuts_the_edge():
     # The map joins A to B by one 4 m edge that went past M. Node X is A again, mapped by a
     # robot that had lost its way; leaving X east it homes onto M after 2 m. Before, the
@@ -48,10 +66,7 @@ def test_a_prediction_shorter_than_its_edge_keeps_the_hypothesis_and_cuts_the_ed
     a, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.6, B_DEPS, 4.0)
     wrong = ex.map.connect(a, 0, b, 1, 4.0)
     ex.map.connect(b, 0, ex.map.add_boundary(0.4, (5.0, 1.0)), 0, 1.2)
-    x = _add(ex, 1.0, A_DEPS, 20.0)
-    h = Hypothesis({x: (a, 0)}, confirmed=2)
-    ex.hyps.live, ex.hyps.fragment = [h], {x}
-    ex.leaving = (x, 0)
+    x, h = _x_is_a_again(ex, a)
     node, _ = ex._arrive(meet(22.0, 0.0, M_DEPS, 180, 2.0, 1.3))
     assert ex.hyps.live == [h] and h.cuts == {wrong} and node not in h.mapping
     ex._merge(h)
@@ -66,10 +81,7 @@ def test_without_the_repair_that_hypothesis_is_refuted():
     ex = Explorer(NOMAD200_LIMITS)  # cut_past is off by default
     a, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.6, B_DEPS, 4.0)
     ex.map.connect(a, 0, b, 1, 4.0)
-    x = _add(ex, 1.0, A_DEPS, 20.0)
-    h = Hypothesis({x: (a, 0)}, confirmed=2)
-    ex.hyps.live, ex.hyps.fragment = [h], {x}
-    ex.leaving = (x, 0)
+    _x, h = _x_is_a_again(ex, a)
     ex._arrive(meet(22.0, 0.0, M_DEPS, 180, 2.0, 1.3))
     assert all(o is not h for o in ex.hyps.live)
 
@@ -79,13 +91,8 @@ def test_a_traversal_longer_than_predicted_that_fits_the_node_beyond_maps_it_the
     # and homes onto B after 4.1 m: the hypothesis maps the new node to B, and the edge just
     # traced, which went past M, goes at the merge.
     ex = Explorer(NOMAD200_LIMITS, params=PAST)
-    a, m, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.3, M_DEPS, 2.0), _add(ex, 1.6, B_DEPS, 4.0)
-    ex.map.connect(a, 0, m, 2, 2.0)
-    ex.map.connect(m, 0, b, 1, 2.0)
-    x = _add(ex, 1.0, A_DEPS, 20.0)
-    h = Hypothesis({x: (a, 0)}, confirmed=2)
-    ex.hyps.live, ex.hyps.fragment = [h], {x}
-    ex.leaving = (x, 0)
+    a, _m, b = _a_m_b(ex)
+    _x, h = _x_is_a_again(ex, a)
     node, _ = ex._arrive(meet(24.1, 0.0, B_DEPS, 180, 4.1, 1.6))
     (past,) = [e.id for e in ex.map.edges() if node in (e.u, e.v)]
     assert h.mapping[node] == (b, 0) and h.cuts == {past}
@@ -96,13 +103,8 @@ def test_a_traversal_longer_than_predicted_that_fits_the_node_beyond_maps_it_the
 
 def test_a_longer_traversal_that_fits_no_node_beyond_still_refutes():
     ex = Explorer(NOMAD200_LIMITS, params=PAST)
-    a, m, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.3, M_DEPS, 2.0), _add(ex, 1.6, B_DEPS, 4.0)
-    ex.map.connect(a, 0, m, 2, 2.0)
-    ex.map.connect(m, 0, b, 1, 2.0)
-    x = _add(ex, 1.0, A_DEPS, 20.0)
-    h = Hypothesis({x: (a, 0)}, confirmed=2)
-    ex.hyps.live, ex.hyps.fragment = [h], {x}
-    ex.leaving = (x, 0)
+    a, _m, _b = _a_m_b(ex)
+    _x, h = _x_is_a_again(ex, a)
     ex._arrive(meet(26.0, 0.0, B_DEPS, 180, 6.0, 1.6))  # 6 m: neither M nor B
     assert all(o is not h for o in ex.hyps.live)
 

@@ -566,8 +566,7 @@ class Explorer:
         a = ev.arrival_index
         assert a is not None
         w = self.map.edge(e).other_end(f, j)[0]
-        kept = [h for h in self.hyps.live if not (f in h.mapping and w in h.mapping)]
-        self.hyps.live = kept
+        self._drop_placing_both(f, w)
         self.map.remove_edge(e)
         self.edge_gap.pop(e, None)
         self._note(
@@ -575,6 +574,14 @@ class Explorer:
             "is removed"
         )
         return self._new_edge(ev, self._seen(ev, a, f), f, j, length)
+
+    def _drop_placing_both(self, f: int, w: int) -> int:
+        """Drop the hypotheses that placed both ends of an edge found to hold a junction:
+        they placed the edge as one, which it is not. Returns how many went."""
+        kept = [h for h in self.hyps.live if not (f in h.mapping and w in h.mapping)]
+        dropped = len(self.hyps.live) - len(kept)
+        self.hyps.live = kept
+        return dropped
 
     def _missed_junction(
         self, ev: MeetPointReached, f: int, j: int, e: int, length: float
@@ -594,10 +601,7 @@ class Explorer:
             f"node {node} found {length:.2f} m along edge {e} ({f}-{w}), a junction its first "
             f"tracing went by: split into edges {near_e} and {far_e}"
         )
-        # A hypothesis that placed both ends placed the edge as one, which it is not.
-        kept = [h for h in self.hyps.live if not (f in h.mapping and w in h.mapping)]
-        dropped = len(self.hyps.live) - len(kept)
-        self.hyps.live = kept
+        dropped = self._drop_placing_both(f, w)
         # It may be a junction already mapped from another side; both its known ports must
         # then be unexplored there.
         deg = ev.degree
@@ -1389,9 +1393,7 @@ class Explorer:
         (``_junction_on_edge``). Each edge is tried once."""
         if not self.p.verify_edges:
             return []
-        dist = nx.single_source_dijkstra_path_length(
-            self.map.graph, node, weight=lambda u, v, d: min(x["length_m"] for x in d.values())
-        )
+        dist = self._distances(node)
         best: tuple[float, int, int] | None = None
         for e in self.map.edges():
             if e.id in self.verified or len(e.lengths_m) > 1:
@@ -1412,14 +1414,18 @@ class Explorer:
         path = self.map.shortest_path(node, start) if start != node else []
         return [*path, Step(start, port, e, far, far_port)]
 
+    def _distances(self, node: int) -> dict[int, float]:
+        """Graph distance from ``node`` to every node it reaches, by the shortest edges."""
+        return nx.single_source_dijkstra_path_length(
+            self.map.graph, node, weight=lambda u, v, d: min(x["length_m"] for x in d.values())
+        )
+
     def _frontier_path(self, node: int) -> list[Step]:
         """The graph path to the nearest node with a departure left to explore."""
         todo = {n for n, _ in self.unexplored()}
         if not todo:
             return []
-        dist = nx.single_source_dijkstra_path_length(
-            self.map.graph, node, weight=lambda u, v, d: min(x["length_m"] for x in d.values())
-        )
+        dist = self._distances(node)
         reachable = [(d, n) for n, d in dist.items() if n in todo]
         if not reachable:
             return []
