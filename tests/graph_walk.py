@@ -61,6 +61,7 @@ def walk(
     misread: Callable[[str, int | None, int], list[float] | None] | None = None,
     lost_at: Collection[int] = (),
     passed: Callable[[str, int, int], int | None] | None = None,
+    read_distance: bool = False,
 ) -> list[str]:
     """Run the explorer over ``graph`` from ``start``; returns the true nodes visited.
 
@@ -73,7 +74,11 @@ def walk(
 
     ``passed(node, true arrival port, passes so far)`` may return the port by which the robot
     goes on through that meet point without homing there (a junction the ring does not
-    resolve); the tracer then reports the node beyond, with both edges' length."""
+    resolve); the tracer then reports the node beyond, with both edges' length.
+
+    ``read_distance``: each new meet node is stamped with the distance travelled so far, as
+    the robot's encoder stamps it, so the explorer's heading check at a merge (turned no
+    further than drift over that distance allows) is in play. Off, it is never applied."""
     rng = random.Random(seed)
     heading_err = 0.0
     at, came_by, length = start, arrival_port, None
@@ -81,6 +86,16 @@ def walk(
     gone_through: list[str] = []
     where = [graph.nodes[at][3], graph.nodes[at][4]]  # what the truth callback reports
     explorer.truth = lambda: (where[0], where[1])
+    travelled = 0.0
+    if read_distance:
+        add_meet = explorer._add_meet
+
+        def stamped(ev: MeetPointReached) -> int:
+            node = add_meet(ev)
+            explorer.born[node] = travelled
+            return node
+
+        explorer._add_meet = stamped  # type: ignore[method-assign]
     for _ in range(max_arrivals):
         _, clr, deps, x, y = graph.nodes[at]
         where[:] = [x, y]
@@ -100,6 +115,7 @@ def walk(
             tuple((d - obs[arr or 0]) % TAU for d in obs), length,
         )  # fmt: skip
         explorer._now += 1.0
+        travelled += length or 0.0
         k = explorer._choose(ev)
         if explorer.held:  # done, or standing at the node it was sent to
             break
@@ -118,6 +134,7 @@ def walk(
             bx, by = graph.nodes[nxt][3], graph.nodes[nxt][4]
             where[:] = [bx, by]
             explorer._on_boundary(BoundaryReached(0.0, bx, by, 0.4, length))
+            travelled += length
             visited.append(nxt)
             came_by = port  # straight back
         else:

@@ -12,7 +12,7 @@ import pytest
 from hal.interfaces import NOMAD200_LIMITS
 from sim_backend.ground_truth import compute_gvg
 from sim_backend.world_files import load_world
-from tests.graph_walk import TrueGraph, from_ground_truth, walk
+from tests.graph_walk import TrueGraph, from_ground_truth, straight_on, walk
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.topomap import TopoMap
 from tslam.core.tracer import MeetPointReached
@@ -208,3 +208,26 @@ def test_a_piece_out_of_reach_is_merged_only_where_it_fits_alone(copies, merged)
     assert bool(ex._place_orphans(pieces[0][0])) is merged
     assert len(m.nodes()) == (before - 3 if merged else before)
     assert bool(ex.merges) is merged
+
+
+@pytest.mark.parametrize("junction", ["7", "11"])
+def test_a_mirror_image_that_a_junction_passed_unhomed_leaves_is_refused_by_heading(junction):
+    # fig15 walked with meet point 7 or 11 passed once without homing: the edge that went past
+    # it refutes the right placement of what the robot maps next, and the mirror wing, half a
+    # turn away, is then the only place it fits. Topology cannot refuse that merge; dead
+    # reckoning's heading, good to a few degrees over the distance walked, does.
+    gvg = compute_gvg(load_world("fig15"))
+    graph = from_ground_truth(gvg)
+    start = next(n for n, v in graph.nodes.items() if v[0] == "meet")
+    merges = {}
+    for read in (True, False):
+        ex = Explorer(NOMAD200_LIMITS)
+        walk(
+            graph, ex, start, max_arrivals=300, noise=0.03, seed=1, drift_deg_per_edge=0.5,
+            passed=lambda n, c, k: straight_on(graph, n, c) if n == junction and k < 1 else None,
+            read_distance=read,
+        )  # fmt: skip
+        merges[read] = false_merges(ex)
+        if read:
+            assert any("turned further than dead reckoning drifts" in n.text for n in ex.notes)
+    assert merges[True] == 0 and merges[False] > 0
