@@ -106,6 +106,9 @@ class ExplorerParams:
     # The tracer may leave its edge for a moment (a silent patch, a bump) and re-access it.
     # Back on an edge within this (dead-reckoned, so short-range) distance, it is the same one.
     rejoin_m: float = 1.0
+    # ... and within this much, having driven no further off it, nothing was disturbed (0:
+    # every excursion makes the edge's length a bound only).
+    blip_m: float = 0.3
     # Homed back onto the point just left (the edge could not be held near the junction):
     # recognised by dead reckoning, which is good over a metre, and retried once.
     bounce_m: float = 0.2
@@ -223,7 +226,9 @@ class Explorer:
         self.detoured = False  # the tracer left the edge since, and did not rejoin it
         self.disturbed = False  # ... or left it and rejoined it: the length is only a bound
         self.wandered_m = 0.0  # ... the distance driven off the edge since (excursions)
-        self._detour_from: tuple[float, float, float, bool] | None = None
+        # Where an excursion off the edge began: x, y, encoder distance, and the two flags
+        # above as they stood then.
+        self._detour_from: tuple[float, float, float, bool, bool] | None = None
         self.partial_m = 0.0  # length before a weak meet point passed through
         self._through: int | None = None  # ... and the departure that goes on through it
         self.plan: list[Step] = []
@@ -345,19 +350,28 @@ class Explorer:
         b = self.tracer.behaviour
         if b in (Behaviour.ACCESS, Behaviour.BACKOFF):
             if self._detour_from is None:
-                self._detour_from = (odo.x_m, odo.y_m, odo.distance_m, self.detoured)
+                self._detour_from = (
+                    odo.x_m, odo.y_m, odo.distance_m, self.detoured, self.disturbed
+                )  # fmt: skip
             self.detoured = self.disturbed = True
         elif self._detour_from is not None and b is Behaviour.TRACE:
-            x, y, d0, off_already = self._detour_from
+            x, y, d0, off_already, disturbed_already = self._detour_from
             gap = math.hypot(odo.x_m - x, odo.y_m - y)
+            driven = odo.distance_m - d0
             # Back on an edge close by after a short excursion that began on the edge: the
             # same edge, and the few decimetres of wandering are within the length tolerance.
             # After a long one the length says nothing any more: the robot does not know
             # where it came from.
-            short = gap <= self.p.rejoin_m and odo.distance_m - d0 - gap <= self.p.rejoin_m
-            self.wandered_m += odo.distance_m - d0
+            short = gap <= self.p.rejoin_m and driven - gap <= self.p.rejoin_m
+            self.wandered_m += driven
             if short and not off_already:
                 self.detoured = False
+            if gap <= self.p.blip_m and driven <= self.p.blip_m:
+                # A blip: the ring lost one wall's echo for a cycle or two, which reads as
+                # off the edge although the robot is on it; the edge-length chord bridges it
+                # to centimetres. Taking every such edge's length as only a bound (most of
+                # fig12's long edges had a blip) left their arrivals unchecked by length.
+                self.disturbed = disturbed_already
             self._detour_from = None
 
     def unexplored(self) -> list[tuple[int, int]]:
@@ -1023,6 +1037,12 @@ class Explorer:
         # A hypothesis no prediction has tested yet is in the same position as "all of it is
         # new": possible, unrefuted, unsupported. Only tested hypotheses compete.
         tested = self._tested()
+        if len(tested) > 1:
+            # A hypothesis whose merge would be refused below for its heading is no rival
+            # either, as in ``_other_placements``: it only kept the right one waiting, while
+            # the fragment grew round a loop onto itself (fig12 seed 5).
+            plausible = [h for h in tested if not self._heading_misfits(h)]
+            tested = plausible or tested
         if 1 < len(tested) <= FOLD_MAX and self.p.fold_implied:
             tested = self._fold_implied(tested)
         if len(tested) == 1 and tested[0].proven(self.p.merge_evidence, self.p.weigh_crowd):
