@@ -1,4 +1,5 @@
-"""What a moment off the edge costs the explorer, and what a rival turned too far costs a merge.
+"""What a moment off the edge costs the explorer, what a U-turn on a long edge costs it, and
+what a rival turned too far costs a merge.
 
 The ring loses one wall's echo for a cycle or two now and then (six to ten of sixteen
 transducers silent in a corridor); the tracer then reads itself off the edge, re-accesses
@@ -16,6 +17,7 @@ import pytest
 
 from hal.interfaces import NOMAD200_LIMITS
 from hal.types import Odometry
+from tests.test_explorer_split import meet
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
 from tslam.core.tracer import Behaviour
@@ -86,3 +88,22 @@ def test_two_rivals_that_both_fit_the_heading_are_not_merged():
     assert not ex._heading_misfits(ex.hyps.live[1])
     assert ex._resolve(x) == {}
     assert all(ex.map.has_node(n) for n in (a, b, x))
+
+
+@pytest.mark.parametrize(
+    ("arrival_deg", "far_m", "bounce"),
+    [
+        (0, 20.0, True),  # back by the departure it left by: a U-turn
+        (0, 0.0, False),  # ... as before: only within 1.5 m
+        (120, 20.0, False),  # back by another edge: round a loop, for the map to prove
+    ],
+)
+def test_a_u_turn_on_a_long_edge_is_back_at_the_node_it_left(arrival_deg, far_m, bounce):
+    # fig12 seed 2: 9.3 m out along the long edge and back, and the junction mapped again.
+    ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(bounce_far_m=far_m))
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    assert ex._choose(meet(0.0, 0.0, [0, 120, 240], None, None)) == 0  # off east
+    ex._odo = Odometry(0.1, 0.0, 0.0, 0.0, 9.0, 9.0)
+    ex._choose(meet(0.1, 0.0, [0, 120, 240], arrival_deg, 9.0))
+    assert (ex.notes[-1].text == "back at node 1: departure 0 could not be held") is bounce
+    assert len(ex.map.nodes()) == (1 if bounce else 2)

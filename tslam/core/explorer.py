@@ -114,6 +114,10 @@ class ExplorerParams:
     bounce_m: float = 0.2
     bounce_angle_rad: float = math.radians(20.0)
     bounce_length_m: float = 1.5
+    # ... or back by the same departure after up to this long (a U-turn), dead reckoning
+    # placing it within bounce_m and this fraction of the way (0: none).
+    bounce_far_m: float = 20.0
+    bounce_rel: float = 0.02
     bounce_retries: int = 1
     # A hypothesis that has predicted nothing for this many arrivals in a row is dropped: the
     # robot has gone where it cannot be tested, and "a new place" explains as much. This is
@@ -445,11 +449,17 @@ class Explorer:
         if lv is None or self.leaving is None or ev.edge_length_m is None:
             return None
         node, deps, pm, x, y = lv
+        length = ev.edge_length_m
+        # Further out, a U-turn: back by the departure it left by, which dead reckoning,
+        # good over an edge (section V-C), places where it left (fig12 seed 2: 9.3 m out and
+        # back along its long edge, and the junction was mapped again).
+        far = length > p.bounce_length_m
+        reach = p.bounce_m + (p.bounce_rel * length if far else 0.0)
         if (
             node != self.leaving[0]
             or not self.map.has_node(node)
-            or ev.edge_length_m > p.bounce_length_m
-            or math.hypot(ev.x_m - x, ev.y_m - y) > p.bounce_m
+            or (far and length > p.bounce_far_m)
+            or math.hypot(ev.x_m - x, ev.y_m - y) > reach
             or ev.degree != len(deps)
         ):
             return None
@@ -466,11 +476,13 @@ class Explorer:
         if misfit(shift) > p.bounce_angle_rad:
             return None
         key = self.leaving
-        self._count_bounce(key)
-        self._note(f"back at node {node}: departure {key[1]} could not be held")
         pm = pm.shifted_events(shift, ev.degree)
         a = ev.arrival_index
         arrival = next((p for p, i in enumerate(pm.index) if i == a), None)
+        if far and arrival != key[1]:
+            return None  # round a loop, maybe: dead reckoning alone does not close loops
+        self._count_bounce(key)
+        self._note(f"back at node {node}: departure {key[1]} could not be held")
         return node, PortMap(pm.index, arrival)
 
     def _expected(

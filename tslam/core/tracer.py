@@ -131,6 +131,11 @@ class TracerParams:
     sides_along_rad: float = math.radians(45.0)  # ... their edge this close to the way
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
+    # ... unless it was on one this recently: it coasts. Distance to an obstacle cannot jump
+    # faster than the robot moves, so a jump of d2 - d1 in a second is the ring losing a
+    # wall's echo (six to ten of sixteen transducers fall silent in a corridor), and the
+    # re-access it used to set off disturbed the edge's length. 0: re-access at once.
+    off_edge_coast_s: float = 0.0
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
     rejected_meet_m: float = 0.5  # ... or this far, from one the sweep rejected ...
     fast_ring_firings: float = 8.0  # ... on a ring whose transducers each fired this often
@@ -223,6 +228,7 @@ class _State:
     # onto another of its edges a moment before homing starts.
     trail: deque[tuple[float, float, float]] = field(default_factory=lambda: deque(maxlen=64))
     last_seen: float = 0.0
+    last_paired: float = -math.inf  # when the trace last had its two obstacles within off_edge_m
     # The edge's length: its own, not the weaving path's, and homing's wander left out (a
     # noisy third echo pulls the circumcentre about): see edgelength.py.
     odometer: EdgeOdometer = field(default_factory=EdgeOdometer)
@@ -340,8 +346,11 @@ class Tracer:
             self._boundary(obs[0].distance_m, odo, now, events)
             return None
         if obs[1].distance_m - obs[0].distance_m > p.off_edge_m:
+            if now - s.last_paired <= p.off_edge_coast_s:
+                return s.last_twist
             s.behaviour = Behaviour.ACCESS  # these two are not the edge's obstacles
             return None
+        s.last_paired = now
         if s.armed and self._meet_near(obs, odo):
             s.behaviour = Behaviour.HOME
             s.home_target = None

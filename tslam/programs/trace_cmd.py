@@ -59,6 +59,7 @@ _SETS: dict[str, dict[str, bool | float]] = {
     "held_no_support": {},
     "place": {"place_radius_m": 0.4},
     "hold_on": {"home_hold_m": 0.6, "sweep_join_pieces": True, "sweep_shallow_bend": True},
+    "coast": {"off_edge_coast_s": 1.0},
 }
 SWITCHES = tuple(_SETS)
 
