@@ -4,11 +4,9 @@ copies multiply (``Explorer._lead_ins``, ``Explorer._fold_implied``)."""
 
 from __future__ import annotations
 
-import math
-
 from hal.interfaces import NOMAD200_LIMITS
 from tslam.core.explorer import Explorer, ExplorerParams
-from tslam.core.localize import Hypothesis, Tolerances, candidates
+from tslam.core.localize import Tolerances, candidates
 from tslam.core.topomap import TopoMap
 from tslam.programs.sim_cmd import explore, report
 
@@ -61,31 +59,3 @@ def test_the_crowd_counts_look_alikes_whose_arrival_departure_is_explored():
     assert ex._crowd(new, fresh) == 4
     narrow = Explorer(NOMAD200_LIMITS, params=ExplorerParams(crowd_all_ports=False), tmap=m)
     assert narrow._crowd(new, fresh) == 1
-
-
-def test_a_fragment_that_came_round_onto_itself_is_still_placed_and_merged():
-    # A triangle A-B-C mapped, and A's copy X reached from C. While the hypothesis "X is A"
-    # waited, the robot went round again, X-Y-Z-W, and W was confirmed as X: the hypothesis
-    # maps W to another of its own fragment nodes. Placed with that claim, the fragment put
-    # two nodes on one place and the hypothesis never fitted, so it never merged (fig12 seed
-    # 5, on the way to a fix elsewhere); X, Y, Z and W stayed copies.
-    ex = Explorer(NOMAD200_LIMITS)
-    m = ex.map
-    deps = (0.0, 2 * math.pi / 3, 4 * math.pi / 3)
-    places = ((1.0, (0, 0)), (1.5, (3, 0)), (2.0, (1, 3)))
-    a, b, c = (m.add_meet(clr, deps, xy) for clr, xy in places)
-    m.connect(a, 0, b, 1, 3.0)
-    m.connect(b, 0, c, 1, 4.0)
-    x, y, z, w = (m.add_meet(clr, deps, (0, 0)) for clr in (1.0, 1.5, 2.0, 1.0))
-    m.connect(c, 0, x, 1, 5.0)
-    m.connect(x, 0, y, 1, 3.0)
-    m.connect(y, 0, z, 1, 4.0)
-    m.connect(z, 0, w, 1, 5.0)
-    ex.hyps.fragment |= {x, y, z, w}
-    h = Hypothesis({x: (a, 0), y: (b, 0), z: (c, 0), w: (x, 0)}, confirmed=3)
-    ex.hyps.live = [h]
-    assert ex._other_placements(h) == ([], True)
-    renamed = ex._resolve(w)
-    assert {renamed[n][0] for n in (x, y, z, w)} == {a, b, c}
-    assert sorted(n.id for n in m.nodes()) == [a, b, c]
-    assert len(m.edges()) == 3

@@ -1125,15 +1125,9 @@ class Explorer:
     def _other_placements(self, h: Hypothesis) -> tuple[list[Placement], bool] | None:
         """``other_placements`` of ``h``'s fragment, in the map as ``h``'s claims about old
         nodes (a lead-in: an old node is a copy of another) would make it: there the copies
-        are one place, and a placement on a copy is no rival. A claim that a fragment node
-        is another of ``h``'s fragment nodes (the robot went round a loop while ``h`` waited)
-        is left out: those two are one node, placed once."""
+        are one place, and a placement on a copy is no rival."""
         view = self._view(h)
-        frag = self.hyps.fragment
-        inner = {x for x, (c, _) in h.mapping.items() if c in h.mapping and c in frag}
-        if inner:
-            h = replace(h, mapping={x: ck for x, ck in h.mapping.items() if x not in inner})
-        old = {x: ck for x, ck in h.mapping.items() if x not in frag}
+        old = {x: ck for x, ck in h.mapping.items() if x not in self.hyps.fragment}
         if not old:
             return other_placements(view, h, self.p.tol, fits=self._heading_fits)
         merged = self._merged_copy(old, view)
