@@ -38,7 +38,9 @@ def _excursion(ex: Explorer, out_m: float, back_at: tuple[float, float]) -> None
         (0.1, (0.05, 0.0), 0.3, False, False),  # a blip: nothing happened
         (0.1, (0.05, 0.0), 0.0, True, False),  # ... as before: the length is a bound
         (0.6, (0.4, 0.0), 0.3, True, False),  # a short excursion: the same edge, a bound
-        (2.5, (0.4, 0.0), 0.3, True, True),  # a long one: the robot does not know where
+        (2.5, (0.4, 0.0), 0.3, True, False),  # backing and turning near a junction
+        (5.0, (0.4, 0.0), 0.3, True, True),  # a long one: the robot does not know where
+        (1.5, (1.2, 0.0), 0.3, True, True),  # ... or back too far from where it left
     ],
 )
 def test_a_blip_off_the_edge_leaves_its_length_whole(out_m, back_at, blip_m, disturbed, detoured):

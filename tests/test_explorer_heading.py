@@ -39,8 +39,9 @@ def test_fig15_mirror_image_is_not_merged():
     image at 868 s, and with the heading check off it makes 5 false merges in 2400 s. (With
     the crowd of look-alikes weighed, that hypothesis is not proven so soon; the heading check
     is tested here alone: without lead-in hypotheses too, which compete with it there.) With
-    stop 25's tracer (``tests.tracer_paths``)."""
-    params = ExplorerParams(weigh_crowd=False, lead_ins=False)
+    stop 25's tracer (``tests.tracer_paths``), and re-joins as strict as they were then (a
+    re-access counted as lost after driving 1 m more than it was off)."""
+    params = ExplorerParams(weigh_crowd=False, lead_ins=False, rejoin_drive_m=1.0)
     run = explore(
         "fig15", 4, "paper", duration_s=2400.0, progress=False, params=params, tracer_params=STOP25
     )

@@ -106,6 +106,9 @@ class ExplorerParams:
     # The tracer may leave its edge for a moment (a silent patch, a bump) and re-access it.
     # Back on an edge within this (dead-reckoned, so short-range) distance, it is the same one.
     rejoin_m: float = 1.0
+    # ... having driven no more than this further (a re-access near a junction backs and
+    # turns: fig12 seed 8 drove 1.6 m to be back 0.2 m from where it left, and went lost).
+    rejoin_drive_m: float = 4.0
     # ... and within this much, having driven no further off it, nothing was disturbed (0:
     # every excursion makes the edge's length a bound only).
     blip_m: float = 0.3
@@ -366,7 +369,7 @@ class Explorer:
             # same edge, and the few decimetres of wandering are within the length tolerance.
             # After a long one the length says nothing any more: the robot does not know
             # where it came from.
-            short = gap <= self.p.rejoin_m and driven - gap <= self.p.rejoin_m
+            short = gap <= self.p.rejoin_m and driven - gap <= self.p.rejoin_drive_m
             self.wandered_m += driven
             if short and not off_already:
                 self.detoured = False
