@@ -109,3 +109,43 @@ def test_a_u_turn_on_a_long_edge_is_back_at_the_node_it_left(arrival_deg, far_m,
     ex._choose(meet(0.1, 0.0, [0, 120, 240], arrival_deg, 9.0))
     assert (ex.notes[-1].text == "back at node 1: departure 0 could not be held") is bounce
     assert len(ex.map.nodes()) == (1 if bounce else 2)
+
+
+def _triangle() -> tuple[Explorer, dict[str, int], dict[str, dict[int, int]]]:
+    """fig12's shape: junctions A, B and C alike, 5 m apart along A-B and B-C, 10 m along
+    A-C (round a block), each with a third departure to a dead end, C's evenly spread;
+    returns the explorer, the nodes, and per node the port toward each bearing (degrees)."""
+    ex = Explorer(NOMAD200_LIMITS)
+    bearings = {"A": (0, 60, 180), "B": (180, 120, 300), "C": (240, 0, 120)}
+    where = {"A": (0.0, 0.0), "B": (5.0, 0.0), "C": (2.5, 4.3)}
+    nodes, ports = {}, {}
+    for name, degs in bearings.items():
+        deps = sorted(math.radians(d) for d in degs)
+        nodes[name] = ex.map.add_meet(0.9, deps, where[name])
+        ports[name] = {d: deps.index(math.radians(d)) for d in degs}
+        ex.born[nodes[name]] = 0.0
+    ex.map.connect(nodes["A"], ports["A"][0], nodes["B"], ports["B"][180], 5.0)
+    ex.map.connect(nodes["B"], ports["B"][120], nodes["C"], ports["C"][0], 5.2)
+    ex.map.connect(nodes["A"], ports["A"][60], nodes["C"], ports["C"][240], 10.0)
+    return ex, nodes, ports
+
+
+@pytest.mark.parametrize("heading_read", [True, False])
+def test_the_other_way_round_a_triangle_is_recognised_by_heading(heading_read):
+    # fig12 seed 8: meant to take the 10 m edge from A, the robot went by B, through it
+    # unhomed, and came to C after 10.3 m by the edge from B. C's departures are evenly
+    # spread: by the signature alone it could be C reached by the 10 m edge, the map then
+    # turned a third of a turn at C, and every departure after it wrong.
+    ex, nodes, ports = _triangle()
+    a, c = nodes["A"], nodes["C"]
+    ex.here, ex.leaving = a, (a, ports["A"][60])
+    ex._odo = Odometry(2.5, 4.3, 0.0, 0.0, 100.0, 10.3) if heading_read else None
+    ev = meet(2.5, 4.3, [240, 0, 120], 0, 10.3)
+    node, rot = ex._identify(ev)
+    assert node == c
+    arrived_by = (ev.arrival_index + rot) % 3
+    if heading_read:
+        assert arrived_by == ports["C"][0]  # from B
+        assert ex.notes[-1].text.endswith("went another way, recognised node 3")
+    else:
+        assert arrived_by == ports["C"][240]  # taken for the 10 m edge: turned

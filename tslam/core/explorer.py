@@ -496,7 +496,7 @@ class Explorer:
         w, q = edge.other_end(f, j)
         a = ev.arrival_index
         assert a is not None
-        k = self._match(seen, a, w, q, length, edge.length_m)
+        k = self._match(ev, seen, a, w, q, length, edge.length_m)
         dead_end = (
             k is None
             and self.map.node(f).kind == "boundary"
@@ -563,13 +563,16 @@ class Explorer:
                 continue
             e2d = self.map.edge(e2)
             w2, q2 = e2d.other_end(w, p)
-            k2 = self._match(seen_past, a, w2, q2, length, edge.length_m + e2d.length_m)
+            k2 = self._match(ev, seen_past, a, w2, q2, length, edge.length_m + e2d.length_m)
             if k2 is not None:
                 found.append((w2, k2))
         if len(found) == 1:
             self._note(f"expected node {w}, recognised node {found[0][0]} one edge further")
             self.partial_m = 0.0
             return found[0]
+        went_otherwise = self._went_otherwise(ev, a, f, j, length)
+        if went_otherwise is not None:
+            return went_otherwise
         for back in (False, True):
             went = self._walked_to(ev, a, length, back)
             if went is not None:
@@ -581,6 +584,45 @@ class Explorer:
             f"{ev.clearance_m:.2f} m after {length or 0:.2f} m"
         )
         return self._lost(ev, why)
+
+    def _went_otherwise(
+        self, ev: MeetPointReached, a: int, f: int, j: int, length: float | None
+    ) -> tuple[int, int] | None:
+        """The node the robot came to if it left ``f`` by another departure than ``j`` and
+        went one known edge, or two through a junction it did not home at: the one such
+        node whose signature, arrival port, heading and the way's length all fit, if there
+        is exactly one. In fig12 the robot meant to take the 10 m edge, went the other way
+        round the triangle through a junction unhomed, and arrived after 10.3 m (seed 8).
+        Only with dead reckoning's heading to check the rotation: the junctions of fig12
+        look alike from every side."""
+        if length is None or self._odo is None:
+            return None
+        found: set[tuple[int, int]] = set()
+        for p, e1 in enumerate(self.map.node(f).ports):
+            if p == j or e1 is None:
+                continue
+            d1 = self.map.edge(e1)
+            w1, q1 = d1.other_end(f, p)
+            ways = [(w1, q1, d1.length_m, f)]
+            for p2, e2 in enumerate(self.map.node(w1).ports):
+                if p2 == q1 or e2 is None or self.map.node(w1).kind != "meet":
+                    continue
+                d2 = self.map.edge(e2)
+                w2, q2 = d2.other_end(w1, p2)
+                ways.append((w2, q2, d1.length_m + d2.length_m, w1))
+            for w, q, way_m, before in ways:
+                if self.map.node(w).kind != "meet":
+                    continue
+                k = self._match(ev, self._seen(ev, a, before), a, w, q, length, way_m)
+                if k is not None:
+                    found.add((w, k))
+        if len(found) != 1:
+            return None
+        ((w, k),) = found
+        self._count_bounce((f, j))
+        self._note(f"departure {j} of node {f} not held: went another way, recognised node {w}")
+        self.partial_m = 0.0
+        return w, k
 
     def _junction_on_edge(
         self, ev: MeetPointReached, f: int, j: int, e: int, length: float
@@ -724,12 +766,27 @@ class Explorer:
         )
 
     def _match(
-        self, seen: Signature, a: int, w: int, q: int, length: float | None, mapped: float
+        self,
+        ev: MeetPointReached,
+        seen: Signature,
+        a: int,
+        w: int,
+        q: int,
+        length: float | None,
+        mapped: float,
     ) -> int | None:
         """The rotation under which ``seen``, arrived at by index ``a``, is node ``w`` reached by
-        its port ``q`` after an edge of ``mapped`` metres; None if it is not."""
+        its port ``q`` after an edge of ``mapped`` metres; None if it is not. Nor is it if
+        that turns ``ev``'s departures further from ``w``'s than dead reckoning drifts: in
+        fig12, whose junctions' departures are about evenly spread, a robot that went the
+        wrong way round the triangle arrived along the other edge, after a length like the
+        planned one, and was taken for arriving as planned, its map turned a third of a turn
+        (seed 8)."""
         pred = Prediction(w, q, mapped, self.map.node(w).kind)
-        return arrival_matches(self.map, seen, a, pred, length, self._tol())
+        k = arrival_matches(self.map, seen, a, pred, length, self._tol())
+        if k is None or self._odo is None:
+            return k
+        return k if self._turn_fits(ev.departures_rad, self._odo.distance_m, w, k) else None
 
     def _new_edge(
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, length: float | None
@@ -1517,7 +1574,7 @@ class Explorer:
             e = node.ports[walk.port]
             assert e is not None
             before = self.map.edge(e).other_end(walk.node, walk.port)[0]
-            k = self._match(self._seen(ev, a, before), a, walk.node, walk.port, None, 0.0)
+            k = self._match(ev, self._seen(ev, a, before), a, walk.node, walk.port, None, 0.0)
             if k is None:
                 return None
             self._walked(walk, back, f"recognised node {walk.node}")
@@ -1575,17 +1632,25 @@ class Explorer:
         """Whether node ``x`` can be old node ``c`` under rotation ``k`` as far as dead
         reckoning's heading goes: their departures, each in the odometry frame of its own
         reading, are turned no more than the drift between those readings allows."""
-        bx, bc = self.born.get(x), self.born.get(c)
-        if bx is None or bc is None or not self.map.has_node(x) or not self.map.has_node(c):
+        bx = self.born.get(x)
+        if bx is None or not self.map.has_node(x) or self.map.node(x).kind != "meet":
             return True
-        nx_, nc = self.map.node(x), self.map.node(c)
-        if nx_.kind != "meet" or nc.kind != "meet" or nx_.degree != nc.degree:
+        return self._turn_fits(self.map.node(x).departures_rad, bx, c, k)
+
+    def _turn_fits(self, deps: tuple[float, ...], read_at_m: float, c: int, k: int) -> bool:
+        """``_heading_fits`` for departures ``deps`` read at encoder distance ``read_at_m``:
+        departure i is port ``(i + k) % degree`` of old node ``c``."""
+        bc = self.born.get(c)
+        if bc is None or not self.map.has_node(c):
             return True
-        deg = nx_.degree
-        turns = [nx_.departures_rad[j] - nc.departures_rad[(j + k) % deg] for j in range(deg)]
+        nc = self.map.node(c)
+        if nc.kind != "meet" or len(deps) != nc.degree:
+            return True
+        deg = nc.degree
+        turns = [deps[j] - nc.departures_rad[(j + k) % deg] for j in range(deg)]
         turn = math.atan2(sum(map(math.sin, turns)), sum(map(math.cos, turns)))
         p = self.p
-        return abs(turn) <= p.heading_base_rad + p.heading_drift_rad_per_m * abs(bx - bc)
+        return abs(turn) <= p.heading_base_rad + p.heading_drift_rad_per_m * abs(read_at_m - bc)
 
     def _heading_misfits(self, h: Hypothesis) -> list[int]:
         return [x for x, (c, k) in sorted(h.mapping.items()) if not self._heading_fits(x, c, k)]
