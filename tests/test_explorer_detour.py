@@ -149,3 +149,21 @@ def test_the_other_way_round_a_triangle_is_recognised_by_heading(heading_read):
         assert ex.notes[-1].text.endswith("went another way, recognised node 3")
     else:
         assert arrived_by == ports["C"][240]  # taken for the 10 m edge: turned
+
+
+@pytest.mark.parametrize("estimated", [True, False])
+def test_a_dead_end_whose_length_a_walk_estimated_is_matched_with_more_slack(estimated):
+    # fig12 seed 10: through its junction unhomed into a dead end, the robot mapped the dead
+    # end's edge as the way's remainder, 1.17 m; back along it, it homed at the junction
+    # after 1.55 m, 4 cm beyond the tolerance, and went lost.
+    ex, nodes, ports = _triangle()
+    a = nodes["A"]
+    b = ex.map.add_boundary(0.4, (-1.0, 0.5))
+    e = ex.map.connect(a, ports["A"][180], b, 0, 1.17)
+    if estimated:
+        ex.estimated.add(e)
+    ex.here, ex.leaving = b, (b, 0)
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 50.0, 50.0)
+    node, _ = ex._identify(meet(0.0, 0.0, [0, 60, 180], 180, 1.55))
+    assert (node == a) is estimated
+    assert (e in ex.estimated) is False  # measured now, or never estimated
