@@ -20,6 +20,7 @@ from hal.types import Odometry
 from tests.test_explorer_split import meet
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
+from tslam.core.portmap import PortMap
 from tslam.core.tracer import Behaviour
 
 
@@ -167,3 +168,26 @@ def test_a_dead_end_whose_length_a_walk_estimated_is_matched_with_more_slack(est
     node, _ = ex._identify(meet(0.0, 0.0, [0, 60, 180], 180, 1.55))
     assert (node == a) is estimated
     assert (e in ex.estimated) is False  # measured now, or never estimated
+
+
+@pytest.mark.parametrize(("way_deg", "recognised"), [(0, True), (180, False)])
+def test_a_departure_not_held_is_told_by_the_way_the_robot_went(way_deg, recognised):
+    # fig12 seed 12: sent down A's unexplored departure, the robot turned back after 0.3 m,
+    # went through A and along its known edge to B. Only the way it went tells that from a
+    # new place down the unexplored departure that looks like B and lies as far.
+    ex, nodes, ports = _triangle()
+    a, b = nodes["A"], nodes["B"]
+    deps = ex.map.node(a).departures_rad
+    ex._last_visit = (a, deps, PortMap.rotation(0, 3, None), 0.0, 0.0)
+    ex.here, ex.leaving = a, (a, ports["A"][180])
+    ex.paths.restart()
+    heading = math.radians(way_deg)
+    for i in range(101):
+        s = 0.05 * i
+        ex.paths.add(Odometry(s * math.cos(heading), s * math.sin(heading), 0.0, 0.0, i, s))
+    ex._odo = Odometry(5.0, 0.0, 0.0, 0.0, 100.0, 5.0)
+    node, _ = ex._identify(meet(5.0, 0.0, [180, 120, 300], 180, 5.0))
+    assert (node == b) is recognised
+    assert any(n.text.endswith("went another way, recognised node 2") for n in ex.notes) is (
+        recognised
+    )

@@ -126,6 +126,9 @@ class ExplorerParams:
     # a traversal measures it: fig12 seed 10 mapped a dead end at 1.17 m so and, back along
     # it, homed at its junction after 1.55 m, 4 cm beyond the tolerance, and went lost.
     estimate_slack_m: float = 0.5
+    # Which departure the robot went out by: the bearing to where its way is first this far
+    # from the node (``_left_by``).
+    left_by_m: float = 0.8
     # A hypothesis that has predicted nothing for this many arrivals in a row is dropped: the
     # robot has gone where it cannot be tested, and "a new place" explains as much. This is
     # the paper's candidate sets, each holding only what adjoins the previous set.
@@ -450,6 +453,8 @@ class Explorer:
         if e is not None:
             return self._expected(ev, seen, f, j, e, length)
         went = self._walked_to(ev, a, length, back=True)
+        if went is None:
+            went = self._went_otherwise(ev, a, f, j, length, known=False)
         if went is not None:
             return went
         return self._new_edge(ev, seen, f, j, length)
@@ -579,7 +584,7 @@ class Explorer:
             self._note(f"expected node {w}, recognised node {found[0][0]} one edge further")
             self.partial_m = 0.0
             return found[0]
-        went_otherwise = self._went_otherwise(ev, a, f, j, length)
+        went_otherwise = self._went_otherwise(ev, a, f, j, length, known=True)
         if went_otherwise is not None:
             return went_otherwise
         for back in (False, True):
@@ -595,7 +600,7 @@ class Explorer:
         return self._lost(ev, why)
 
     def _went_otherwise(
-        self, ev: MeetPointReached, a: int, f: int, j: int, length: float | None
+        self, ev: MeetPointReached, a: int, f: int, j: int, length: float | None, known: bool
     ) -> tuple[int, int] | None:
         """The node the robot came to if it left ``f`` by another departure than ``j`` and
         went one known edge, or two through a junction it did not home at: the one such
@@ -603,12 +608,17 @@ class Explorer:
         is exactly one. In fig12 the robot meant to take the 10 m edge, went the other way
         round the triangle through a junction unhomed, and arrived after 10.3 m (seed 8).
         Only with dead reckoning's heading to check the rotation: the junctions of fig12
-        look alike from every side."""
+        look alike from every side. The way the robot went must also have left ``f`` by
+        that departure (``_left_by``); if departure ``j`` was unexplored (``known`` False)
+        the way must show it, for a new place reached by ``j`` is as likely."""
         if length is None or self._odo is None:
+            return None
+        left = self._left_by(f)
+        if left == j or (left is None and not known):
             return None
         found: set[tuple[int, int]] = set()
         for p, e1 in enumerate(self.map.node(f).ports):
-            if p == j or e1 is None:
+            if p == j or e1 is None or (left is not None and p != left):
                 continue
             d1 = self.map.edge(e1)
             w1, q1 = d1.other_end(f, p)
@@ -632,6 +642,24 @@ class Explorer:
         self._note(f"departure {j} of node {f} not held: went another way, recognised node {w}")
         self.partial_m = 0.0
         return w, k
+
+    def _left_by(self, f: int) -> int | None:
+        """The port of ``f``, the node just left, that the robot's recorded way went out by:
+        the departure nearest the bearing to where the way is first ``left_by_m`` from the
+        node, by dead reckoning over a metre or two. None if the way does not say."""
+        lv, odo = self._last_visit, self._odo
+        if lv is None or lv[0] != f or odo is None:
+            return None
+        path = self.paths.live(f, odo.distance_m)
+        if path is None:
+            return None
+        _, deps, pm, x, y = lv
+        reach = self.p.left_by_m
+        out = next(((u, v) for _, u, v in path.points if math.hypot(u - x, v - y) >= reach), None)
+        if out is None:
+            return None
+        bearing = math.atan2(out[1] - y, out[0] - x)
+        return min(range(len(pm.index)), key=lambda p: _angdiff(deps[pm.index[p]], bearing))
 
     def _junction_on_edge(
         self, ev: MeetPointReached, f: int, j: int, e: int, length: float
