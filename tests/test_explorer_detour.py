@@ -191,3 +191,24 @@ def test_a_departure_not_held_is_told_by_the_way_the_robot_went(way_deg, recogni
     assert any(n.text.endswith("went another way, recognised node 2") for n in ex.notes) is (
         recognised
     )
+
+
+@pytest.mark.parametrize("misread", [False, True])
+def test_what_lies_beyond_a_junction_read_with_another_degree_tests_no_hypothesis(misread):
+    # fig14 seed 1 without drift: a lab junction read with three edges, not four, was left by
+    # what its angle match took for the edge to one look-alike; the robot went along another
+    # to a second look-alike as far, which confirmed a wrong hypothesis: a false merge.
+    ex, nodes, ports = _triangle()
+    a, b = nodes["A"], nodes["B"]
+    x = ex.map.add_meet(0.9, ex.map.node(a).departures_rad, (20.0, 0.0))
+    ex.hyps.fragment.add(x)
+    h = Hypothesis({x: (a, 0)}, confirmed=1)
+    ex.hyps.live = [h]
+    if misread:
+        ex._misread = x
+    ex._leave(x, ports["A"][0])  # toward what A's edge to B is
+    assert ex.unsure_departure is misread
+    ex._identify(meet(25.0, 0.0, [180, 120, 300], 180, 5.0))
+    assert h in ex.hyps.live
+    assert h.confirmed == (1 if misread else 2)
+    assert (h.mapping.get(max(n.id for n in ex.map.nodes()), (None, 0))[0] == b) is not misread

@@ -265,6 +265,11 @@ class Explorer:
         # Edges whose length is a walk's remainder (``_walked_to``): the measured way less the
         # mapped edges it went through, each off by up to a few decimetres.
         self.estimated: set[int] = set()
+        # The node last recognised although read with another degree, and whether the edge
+        # being traced left from it: its ports were matched by angle, so which departure
+        # the robot took is a guess, and what it finds there tests no hypothesis.
+        self._misread: int | None = None
+        self.unsure_departure = False
         # Nodes whose look-alikes were tested and given up on: a copy of one of them may
         # stand in the map (``_lead_ins``).
         self.doubtful: set[int] = set()
@@ -423,6 +428,11 @@ class Explorer:
         else:
             self.paths.restart()
         self.leaving = (node, port)
+        # fig14 seed 1 without drift: a lab junction read with three edges, not four, was
+        # left by what its angle match took for the edge to one look-alike; the robot went
+        # along another to a second look-alike as far, and that confirmed a hypothesis
+        # which merged it onto the first (a false merge).
+        self.unsure_departure = node == self._misread
         self.detoured = self.disturbed = False
         self.wandered_m = 0.0
         self._detour_from = None
@@ -431,6 +441,7 @@ class Explorer:
     def _arrive(self, ev: MeetPointReached) -> tuple[int, PortMap]:
         """Which map node the robot has homed onto, and which of the event's departures is
         which of its ports."""
+        self._misread = None
         node, rot = self._identify(ev)
         if isinstance(rot, PortMap):
             return node, rot
@@ -541,6 +552,7 @@ class Explorer:
             if length is not None and not self.disturbed:
                 self.map.add_measurement(e, length)
             self.partial_m = 0.0
+            self._misread = w
             self._note(
                 f"node {w} confirmed by edge {e} although read with degree {ev.degree}, "
                 f"not {self.map.node(w).degree}"
@@ -838,7 +850,7 @@ class Explorer:
         past: list[tuple[Hypothesis, tuple[int, int] | None]] = []
         for h in self.hyps.live:
             pred = predict(self.map, h, f, j)
-            if pred is None:
+            if pred is None or self.unsure_departure:
                 survivors.append(h)
                 continue
             k = arrival_matches(self.map, seen, a, pred, length, tol)
@@ -1111,7 +1123,7 @@ class Explorer:
         confirmed = []
         for h in self.hyps.live:
             pred = predict(self.map, h, f, j)
-            if pred is None:
+            if pred is None or self.unsure_departure:
                 survivors.append(h)
             elif pred.kind == "boundary" and tol.length_ok(length, pred.length_m):
                 survivors.append(h)
