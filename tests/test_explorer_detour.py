@@ -1,5 +1,7 @@
-"""What a moment off the edge costs the explorer, what a U-turn on a long edge costs it, and
-what a rival turned too far costs a merge.
+"""The slips of stop 29's census, each of which used to leave fig12's junctions mapped twice:
+a moment off the edge, a U-turn on a long edge, a departure not held (the robot gone out of
+the node another way, by known edges), a dead end whose length a walk estimated, a rival
+turned further than drift allows, and a junction read with another degree.
 
 The ring loses one wall's echo for a cycle or two now and then (six to ten of sixteen
 transducers silent in a corridor); the tracer then reads itself off the edge, re-accesses

@@ -635,8 +635,9 @@ class Explorer:
             d1 = self.map.edge(e1)
             w1, q1 = d1.other_end(f, p)
             ways = [(w1, q1, d1.length_m, f)]
-            for p2, e2 in enumerate(self.map.node(w1).ports):
-                if p2 == q1 or e2 is None or self.map.node(w1).kind != "meet":
+            through = self.map.node(w1).ports if self.map.node(w1).kind == "meet" else ()
+            for p2, e2 in enumerate(through):
+                if p2 == q1 or e2 is None:
                     continue
                 d2 = self.map.edge(e2)
                 w2, q2 = d2.other_end(w1, p2)
