@@ -15,9 +15,9 @@ def test_fig12_seed_5_recognises_the_copy_and_completes():
     # Lost at 375 s, the robot left node 7 in the map beside node 2: the same junction. At
     # 740 s it leaves node 2 by the departure node 7 has explored: node 15 is tested as node
     # 7's neighbour 5, with node 2 as node 7. Before, that run made 249 duplicate nodes in
-    # its 4 hours and never finished. With ``blip_m`` 0, as then: since, the blip off the edge
-    # on the way no longer makes its length a bound only, the pass through node 7 is placed
-    # by dead reckoning, and the run is never lost there.
+    # its 4 hours and never finished. It runs with ``blip_m`` 0, as then: with the default
+    # (stop 29) the blip off the edge on the way leaves its length whole, the pass through
+    # node 7 is placed by dead reckoning, and the run is never lost there.
     runs = {}
     for lead_ins in (True, False):
         params = ExplorerParams(lead_ins=lead_ins, blip_m=0.0)
