@@ -181,3 +181,13 @@ def straight_on(graph: TrueGraph, node: str, came_by: int) -> int:
     return min(
         (p for p in range(len(deps)) if p != came_by), key=lambda p: _angdiff(deps[p], ahead)
     )
+
+
+def passed_once(graph: TrueGraph, junction: str) -> Callable[[str, int, int], int | None]:
+    """A ``passed`` callback for ``walk``: the robot goes straight on through ``junction``
+    without homing the first time it comes there, and homes there after."""
+
+    def passed(node: str, came_by: int, before: int) -> int | None:
+        return straight_on(graph, node, came_by) if node == junction and before == 0 else None
+
+    return passed

@@ -12,7 +12,7 @@ import pytest
 from hal.interfaces import NOMAD200_LIMITS
 from sim_backend.ground_truth import compute_gvg
 from sim_backend.world_files import load_world
-from tests.graph_walk import TrueGraph, from_ground_truth, straight_on, walk
+from tests.graph_walk import TrueGraph, from_ground_truth, passed_once, walk
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.topomap import TopoMap
 from tslam.core.tracer import MeetPointReached
@@ -224,7 +224,7 @@ def test_a_mirror_image_that_a_junction_passed_unhomed_leaves_is_refused_by_head
         ex = Explorer(NOMAD200_LIMITS)
         walk(
             graph, ex, start, max_arrivals=300, noise=0.03, seed=1, drift_deg_per_edge=0.5,
-            passed=lambda n, c, k: straight_on(graph, n, c) if n == junction and k < 1 else None,
+            passed=passed_once(graph, junction),
             read_distance=read,
         )  # fmt: skip
         merges[read] = false_merges(ex)

@@ -15,7 +15,7 @@ import pytest
 from hal.interfaces import NOMAD200_LIMITS
 from sim_backend.ground_truth import compute_gvg
 from sim_backend.world_files import load_world
-from tests.graph_walk import from_ground_truth, straight_on, walk
+from tests.graph_walk import from_ground_truth, passed_once, walk
 from tests.test_explorer_graph import false_merges
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
@@ -173,10 +173,7 @@ def test_fig13_with_meet_point_0_passed_unhomed_once_is_mapped_right(seed):
     gvg = compute_gvg(load_world("fig13"))
     graph = from_ground_truth(gvg)
     start = next(n for n, v in graph.nodes.items() if v[0] == "meet")
-
-    def passed(node: str, came: int, before: int) -> int | None:
-        return straight_on(graph, node, came) if node == "0" and before == 0 else None
-
+    passed = passed_once(graph, "0")
     runs = {}
     for on in (True, False):
         ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(cut_past=on, split_open=on))
@@ -242,10 +239,7 @@ def test_a_junction_to_a_dead_end_passed_unhomed_once_is_found_on_the_way_back()
     gvg = compute_gvg(load_world("fig13"))
     graph = from_ground_truth(gvg)
     start = next(n for n, v in graph.nodes.items() if v[0] == "meet")
-
-    def passed(node: str, came: int, before: int) -> int | None:
-        return straight_on(graph, node, came) if node == "6" and before == 0 else None
-
+    passed = passed_once(graph, "6")
     runs = {}
     for on in (True, False):
         ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(verify_edges=on))
