@@ -23,7 +23,7 @@ from tests.test_explorer_split import meet
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
 from tslam.core.portmap import PortMap
-from tslam.core.tracer import Behaviour
+from tslam.core.tracer import Behaviour, BoundaryReached
 
 
 def _excursion(ex: Explorer, out_m: float, back_at: tuple[float, float]) -> None:
@@ -53,6 +53,25 @@ def test_a_blip_off_the_edge_leaves_its_length_whole(out_m, back_at, blip_m, dis
     assert ex._tol().at_least is disturbed
 
 
+@pytest.mark.parametrize("back_as", [Behaviour.TRACE, Behaviour.HOME, Behaviour.DEPART])
+def test_an_excursion_ends_in_the_cycle_the_tracer_is_back_on_the_graph(back_as):
+    # fig1 seed 5 re-accessed 0.2 m short of a dead end's corner; the cycle in which access
+    # paired two walls again also found the corner, so the tracer was departing from it
+    # when the excursion was judged, and the corner was mapped apart from the junction.
+    ex = Explorer(NOMAD200_LIMITS)
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    ex._choose(meet(0.0, 0.0, [0, 120, 240], None, None))
+    ex.tracer.s.behaviour = Behaviour.ACCESS
+    ex._watch_detour(Odometry(1.0, 0.0, 0.0, 0.0, 1.0, distance_m=1.0))
+    assert ex.detoured
+    ex.tracer.s.behaviour = back_as
+    ex._watch_detour(Odometry(1.4, 0.0, 0.0, 0.0, 1.0, distance_m=1.6))
+    assert ex.disturbed and not ex.detoured
+    ex._on_boundary(BoundaryReached(0.0, 1.4, 0.0, 0.4, 1.4))
+    (b,) = [n.id for n in ex.map.nodes() if n.kind == "boundary"]
+    assert ex.map.node(b).ports[0] in {e for e in ex.map.node(1).ports if e is not None}
+
+
 def test_a_blip_after_a_real_excursion_does_not_undo_it():
     ex = Explorer(NOMAD200_LIMITS)
     _excursion(ex, 0.6, (0.4, 0.0))
@@ -60,9 +79,10 @@ def test_a_blip_after_a_real_excursion_does_not_undo_it():
     assert ex.disturbed and not ex.detoured
 
 
-def _two_look_alikes(turn_deg: float) -> tuple[Explorer, int, int, int]:
+def _two_look_alikes(turn_deg: float, confirmed: int = 3) -> tuple[Explorer, int, int, int]:
     """Old nodes ``a`` and ``b`` alike but for ``b`` being turned ``turn_deg`` against ``a``
-    in the odometry frame, and a fragment node ``x`` read as ``a`` is."""
+    in the odometry frame, and a fragment node ``x`` read as ``a`` is; each hypothesis has
+    ``confirmed`` confirmations."""
     ex = Explorer(NOMAD200_LIMITS)
     deps = (0.0, 2 * math.pi / 3, 4 * math.pi / 3)
     turned = sorted((d + math.radians(turn_deg)) % (2 * math.pi) for d in deps)
@@ -72,8 +92,8 @@ def _two_look_alikes(turn_deg: float) -> tuple[Explorer, int, int, int]:
     ex.born.update({a: 0.0, b: 5.0, x: 20.0})
     ex.hyps.fragment.add(x)
     ex.hyps.live = [
-        Hypothesis({x: (a, 0)}, confirmed=2),
-        Hypothesis({x: (b, 0)}, confirmed=2),
+        Hypothesis({x: (a, 0)}, confirmed=confirmed),
+        Hypothesis({x: (b, 0)}, confirmed=confirmed),
     ]
     return ex, a, b, x
 
@@ -86,6 +106,15 @@ def test_a_rival_turned_further_than_drift_allows_does_not_keep_a_proven_one_wai
     renamed = ex._resolve(x)
     assert renamed.get(x, (None, 0))[0] == a
     assert not ex.map.has_node(x) and ex.map.has_node(b)
+
+
+def test_a_rival_set_aside_for_its_heading_asks_one_confirmation_more():
+    # fig15 without drift, seed 2: with the turned rival set aside, the one left had the
+    # two confirmations that prove a single hypothesis, and merged a column of crossings
+    # onto the one beside it. Where places repeat, the fragment may be new and both wrong.
+    ex, a, b, x = _two_look_alikes(60.0, confirmed=2)
+    assert ex._resolve(x) == {}
+    assert all(ex.map.has_node(n) for n in (a, b, x))
 
 
 def test_two_rivals_that_both_fit_the_heading_are_not_merged():

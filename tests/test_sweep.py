@@ -285,3 +285,43 @@ def test_a_wall_cut_into_pieces_by_dropouts_is_one_obstacle_when_joined():
     d = np.array([np.inf, 1.40, 1.40, 1.41, np.inf, 1.40, np.inf])
     (wall,) = sweep_minima(b, d, silent=True)
     assert math.degrees(wall.bearing_rad) == pytest.approx(105.0)
+
+
+def _indent_from_the_corridor(step_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """fig16's corridor meet point as its sweep saw it (seed 2, 41 s): the far wall, and across
+    the corridor the indent: its near corner, its back wall deeper, its far corner, with
+    deeper readings between where the view reaches each inner corner."""
+    b = _ring(step_deg)
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 30) & (deg <= 75)] = 1.16  # the far wall
+    d[(deg >= 180) & (deg <= 196)] = 1.12  # the near corner
+    d[(deg > 196) & (deg < 212)] = 1.44  # past it, into the inner corner
+    d[(deg >= 212) & (deg <= 252)] = 1.25  # the indent's back wall
+    d[(deg > 252) & (deg < 261)] = 1.48
+    d[(deg >= 261) & (deg <= 278)] = 1.16  # the far corner
+    return b, d
+
+
+@pytest.mark.parametrize("step_deg", [2.8, 5.6])
+def test_a_corner_is_not_one_bent_wall_with_the_wall_behind_it(step_deg):
+    b, d = _indent_from_the_corridor(step_deg)
+    # Joined as one bent wall (the readings between are less than 25 % deeper), the corners
+    # and the back wall hid the meet point: two obstacles, no third equidistant.
+    assert len(sweep_minima(b, d)) < 3
+    # The readings between reach beyond the vertex a corner and a wall would make: three
+    # walls equidistant to 4 cm, the back wall 9 cm further.
+    obs = sweep_minima(b, d, vertex=True)
+    found = _bearings(obs[:3])
+    assert all(abs(f - t) <= 4 for f, t in zip(found, [52, 188, 270], strict=True)), found
+    assert obs[2].distance_m - obs[0].distance_m < 0.05
+
+
+def test_the_readings_of_a_true_bent_wall_stay_within_its_vertex():
+    b = _ring()
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 330) & (deg <= 350)] = 1.40
+    d[(deg > 350) | (deg < 10)] = 1.52  # the vertex of faces 1.40 and 1.42 m off: 1.50 m
+    d[(deg >= 10) & (deg <= 30)] = 1.42
+    assert len(sweep_minima(b, d, vertex=True)) == 1

@@ -376,7 +376,12 @@ class Explorer:
                     odo.x_m, odo.y_m, odo.distance_m, self.detoured, self.disturbed
                 )  # fmt: skip
             self.detoured = self.disturbed = True
-        elif self._detour_from is not None and b is Behaviour.TRACE:
+        elif self._detour_from is not None:
+            # Back on the graph: tracing, or already past it within the same control cycle
+            # (access pairs two obstacles, the trace law finds the corner or a meet point
+            # ahead, and the tracer is departing or homing by the time this runs). fig1 seed
+            # 5 re-accessed 0.2 m short of a dead end's corner, and the corner, found in the
+            # cycle tracing resumed, was mapped apart from the junction it was reached from.
             x, y, d0, off_already, disturbed_already = self._detour_from
             gap = math.hypot(odo.x_m - x, odo.y_m - y)
             driven = odo.distance_m - d0
@@ -1160,15 +1165,21 @@ class Explorer:
         # A hypothesis no prediction has tested yet is in the same position as "all of it is
         # new": possible, unrefuted, unsupported. Only tested hypotheses compete.
         tested = self._tested()
+        evidence = self.p.merge_evidence
         if len(tested) > 1:
             # A hypothesis whose merge would be refused below for its heading is no rival
             # either, as in ``_other_placements``: it only kept the right one waiting, while
-            # the fragment grew round a loop onto itself (fig12 seed 5).
+            # the fragment grew round a loop onto itself (fig12 seed 5). But the one left
+            # is not the more likely for it: where places repeat, the fragment may be new
+            # and both wrong (fig15 without drift, seed 2: a column of crossings merged
+            # onto the one beside it, 3.5 m away). It needs one confirmation more.
             plausible = [h for h in tested if not self._heading_misfits(h)]
+            if plausible and len(plausible) < len(tested):
+                evidence += 1
             tested = plausible or tested
         if 1 < len(tested) <= FOLD_MAX and self.p.fold_implied:
             tested = self._fold_implied(tested)
-        if len(tested) == 1 and tested[0].proven(self.p.merge_evidence, self.p.weigh_crowd):
+        if len(tested) == 1 and tested[0].proven(evidence, self.p.weigh_crowd):
             h = tested[0]
             turned = self._heading_misfits(h)
             if turned:

@@ -99,6 +99,7 @@ class Sweep:
         doubts: list[float] | None = None,
         silent: bool = False,
         shallow: bool = False,
+        vertex: bool = False,
     ) -> list[Obstacle]:
         """The obstacles seen, in the frame of a robot heading ``heading_rad``; the options
         as for ``sweep_minima``."""
@@ -111,6 +112,7 @@ class Sweep:
             doubts=doubts,
             silent=silent,
             shallow=shallow,
+            vertex=vertex,
         )
 
 
@@ -127,6 +129,7 @@ def sweep_minima(
     doubts: list[float] | None = None,
     silent: bool = False,
     shallow: bool = False,
+    vertex: bool = False,
 ) -> list[Obstacle]:
     """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
 
@@ -143,7 +146,9 @@ def sweep_minima(
     Two runs joined as one bent wall although a deeper reading lies between them add the
     bearing of that view to ``doubts``: more readings there would tell a stray echo from a
     doorway. With ``shallow`` two runs up to 90 degrees apart are one wall if the readings
-    between them show a shallow bend's vertex (``_shallow_bend``).
+    between them show a shallow bend's vertex (``_shallow_bend``). With ``vertex`` two runs
+    are not one bent wall if a reading between them lies beyond the vertex their two faces
+    would make (``_bend_vertex``).
     """
     n = len(bearing_rad)
     if n < 3:
@@ -209,7 +214,7 @@ def sweep_minima(
     # Every neighbouring pair, counter-clockwise: with two runs that is both arcs between them.
     for k in range(m if m > 1 else 0):
         a, c = runs[k], runs[(k + 1) % m]
-        one = _one_wall(a, c, d, merge_rad, bend_ratio, shallow)
+        one = _one_wall(a, c, d, merge_rad, bend_ratio, shallow, vertex)
         if one is not False:
             parent[root((k + 1) % m)] = root(k)
         if one is None and doubts is not None:
@@ -275,6 +280,24 @@ def _on_plateau(d: np.ndarray, claimed: np.ndarray, k: int, limit: float, room: 
     return room and claimed[k] < 0 and d[k] <= limit
 
 
+def _bend_vertex(
+    a: float, c: float, sep: float, tol_m: float = 0.05, tol_rel: float = 0.03
+) -> float:
+    """The farthest a reading between two faces of one bent wall can be: the distance of the
+    vertex where the faces' lines, ``a`` and ``c`` off along normals ``sep`` apart, meet, plus
+    the sonar's noise. A wall is continuous round its bend, and each reading is the
+    nearest echo in its beam, so none between the faces reaches beyond the vertex. Past a
+    wall's end the view goes deeper: at fig16's indent the corridor's meet point sees the
+    indent's near corner 1.11 m off and its back wall 1.25 m off, 42 degrees apart, and
+    between them the inner corner 1.44 m off, beyond the 1.28 m vertex such a bend would
+    have; joined as one bent wall, the corner and the wall hid the meet point from the sweep.
+    """
+    if sep < math.radians(5.0):
+        return math.inf  # one flat wall: its readings between say nothing of a bend
+    r = math.sqrt(a * a + c * c - 2.0 * a * c * math.cos(sep)) / math.sin(sep)
+    return r + tol_m + tol_rel * r
+
+
 def _shallow_bend(d: np.ndarray, k: int, end: int, far: float) -> bool:
     """Whether the readings from ``k`` up to ``end`` show the vertex of a shallow concave
     bend between two faces at most ``far`` away: echoes all the way, none deeper than a bend
@@ -296,6 +319,7 @@ def _one_wall(
     merge_rad: float,
     bend_ratio: float,
     shallow: bool = False,
+    vertex: bool = False,
 ) -> bool | None:
     """``c`` follows ``a`` counter-clockwise; could the two be one bent wall? None: yes, but
     a view between them too narrow to count was seen (a stray echo, or a narrow doorway)."""
@@ -309,6 +333,8 @@ def _one_wall(
     if sep >= merge_rad:
         return _shallow_bend(d, k, end, max(a[0], c[0]))
     limit = bend_ratio * max(a[0], c[0])
+    if vertex:
+        limit = min(limit, _bend_vertex(a[0], c[0], sep))
     # A view past the bend is some degrees wide; one stray reading is not (an outlier, and a
     # ring that fires fast sweeps hundreds of readings, outliers among them). Each reading
     # stands for the sweep's mean spacing: two deeper readings separate on a slow ring.

@@ -68,6 +68,12 @@ class TracerParams:
     sweep_again: bool = True  # a doubtful sweep turns the turret once more (sweep.py)
     sweep_radps: float = math.radians(22.5) / 3.9
     home_gain: float = 1.0
+    # Homing this close to its point keeps to it when the ring's estimate jumps more than
+    # ``home_jump_m`` away: one echo changed, not the point. At fig16's weak meet point (seed 5)
+    # the robot stood 6 cm off it, one wall's echo dropped out, and the three left defined the
+    # corridor's meet point 0.4 m away, where the sweep then rejected it (0: off).
+    home_keep_m: float = 0.0
+    home_jump_m: float = 0.2
     home_max_mps: float = 0.15
     # Five switches, the four below and SensingParams.held_no_support, each fix a failure found
     # in the composed run through both emulators, fig12 seed 6 without drift, which with all
@@ -109,6 +115,10 @@ class TracerParams:
     # benches no better (README, tracing): off for now.
     sweep_join_pieces: bool = False
     sweep_shallow_bend: bool = False
+    # The switch ``vertex``: two runs of a sweep are one bent wall only if no reading between
+    # them lies beyond the vertex their faces would make (sweep.py); at fig16's indent a
+    # corner and the wall behind it were joined so, and the corridor's meet point rejected.
+    sweep_vertex: bool = False
     sensing: SensingParams = field(default_factory=SensingParams)
     boundary_clearance_m: float = 0.45  # the edge has run into its corner ...
     # ... if the corner is there: an echo this close ahead, within this angle of the way. A
@@ -141,6 +151,10 @@ class TracerParams:
     fast_ring_firings: float = 8.0  # ... on a ring whose transducers each fired this often
     left_meet_m: float = 0.35  # ... and one this close is the meet point just left: no homing
     left_meet_travel_m: float = 2.0  # ... unless the robot has travelled this far since
+    # ... or the point lies ahead on the way out, this far beyond the robot: the junction just
+    # left is behind it, and fig16's weak meet point, 0.36 m from the corridor's, is ahead
+    # (-1: off, the point just left is any point this close).
+    left_meet_ahead_m: float = -1.0
     approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
     approach_look_m: float = 0.5  # the arrival direction: from where the robot was this far back
     backoff_m: float = 0.25  # reverse this far from a contact before re-accessing ...
@@ -443,8 +457,13 @@ class Tracer:
         gone = odo.distance_m - (s.node_distance or 0.0)
         if s.left_meet is None or gone > p.left_meet_travel_m:
             return True  # a loop edge may lead back to it: after this much travel, home
-        return math.hypot(odo.x_m + cx - s.left_meet[0], odo.y_m + cy - s.left_meet[1]) > (
+        if math.hypot(odo.x_m + cx - s.left_meet[0], odo.y_m + cy - s.left_meet[1]) > (
             p.left_meet_m
+        ):
+            return True
+        t = s.tangent
+        return p.left_meet_ahead_m >= 0.0 and t is not None and (
+            cx * t[0] + cy * t[1] > p.left_meet_ahead_m
         )
 
     def _new_meet_ahead(self, obs: list[Obstacle], odo: Odometry) -> bool:
@@ -468,9 +487,12 @@ class Tracer:
         if s.behaviour is Behaviour.SETTLE:
             return self._settle(odo, now, events)
         target = laws.circumcentre(*obs[:3]) if len(obs) >= 3 else None
+        if target is not None and self._jumped(target, odo, now):
+            target = None
         if target is None or math.hypot(*target) > 1.0:
             held = s.home_target
-            if held is not None and p.centred_meet and now - s.home_seen < p.home_patience_s:
+            patient = p.centred_meet and now - s.home_seen < p.home_patience_s
+            if held is not None and (patient or self._keeps(held, odo, now)):
                 target = _to_robot((held[0] - odo.x_m, held[1] - odo.y_m), odo)
             elif (
                 held is not None
@@ -500,6 +522,22 @@ class Tracer:
             return Twist(0.0, 0.0, p.sweep_radps)
         return laws.homing_velocity(target, p.home_gain, p.home_max_mps)
 
+    def _keeps(self, held: tuple[float, float], odo: Odometry, now: float) -> bool:
+        """Whether homing keeps to ``held``: it was this close, and seen a moment ago."""
+        p = self.p
+        return (
+            math.hypot(held[0] - odo.x_m, held[1] - odo.y_m) < p.home_keep_m
+            and now - self.s.home_seen < p.lost_timeout_s
+        )
+
+    def _jumped(self, target: tuple[float, float], odo: Odometry, now: float) -> bool:
+        """Whether the ring's estimate ``target`` (robot frame) left the point homing keeps to."""
+        held = self.s.home_target
+        if held is None or not self._keeps(held, odo, now):
+            return False
+        x, y = _add(_to_odom(target, odo), odo)
+        return math.hypot(x - held[0], y - held[1]) > self.p.home_jump_m
+
     def _settle(self, odo: Odometry, now: float, events: list[Event]) -> Twist | None:
         """Stand still and sweep the turret, then judge the meet point on the sweep."""
         s, p = self.s, self.p
@@ -517,6 +555,7 @@ class Tracer:
             doubts=doubts,
             silent=p.sweep_join_pieces,
             shallow=p.sweep_shallow_bend,
+            vertex=p.sweep_vertex,
         )
         if doubts and p.sweep_again and not s.swept_again:
             # One deeper reading between two walls: a stray echo, or a doorway too narrow
