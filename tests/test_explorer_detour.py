@@ -243,3 +243,37 @@ def test_what_lies_beyond_a_junction_read_with_another_degree_tests_no_hypothesi
     assert h in ex.hyps.live
     assert h.confirmed == (1 if misread else 2)
     assert (h.mapping.get(max(n.id for n in ex.map.nodes()), (None, 0))[0] == b) is not misread
+
+
+@pytest.mark.parametrize(
+    ("way_deg", "port_deg"),
+    [
+        (240, 240),  # out as planned
+        (0, 0),  # clearly along the other unexplored departure: its edge
+        (300, 240),  # between the two: the plan stands
+        (120, 240),  # along the known edge to the dead end: for _went_otherwise to say
+    ],
+)
+def test_an_edge_ends_the_unexplored_departure_the_way_out_took(way_deg, port_deg):
+    # fig16 seed 4 (switch vertex): sent into the indent, the robot went down the corridor;
+    # mapped as the indent's edge, the corridor's junction was not recognised from below.
+    ex = Explorer(NOMAD200_LIMITS)
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    ex._choose(meet(0.0, 0.0, [0, 120, 240], 120, None))  # arrived along 120
+    node = ex.here
+    deps = ex.map.node(node).departures_rad
+    ports = {round(math.degrees(deps[i])) % 360: i for i in range(3)}
+    dead_end = ex.map.add_boundary(0.4, (-0.5, 0.87))
+    ex.map.connect(node, ports[120], dead_end, 0, 1.0)
+    ex._leave(node, ports[240])
+    ex._last_visit = (node, deps, PortMap.rotation(0, 3, None), 0.0, 0.0)
+    ex.paths.restart()
+    heading = math.radians(way_deg)
+    for i in range(61):
+        s = 0.05 * i
+        ex.paths.add(Odometry(s * math.cos(heading), s * math.sin(heading), 0.0, 0.0, i, s))
+    ex._odo = Odometry(3.0 * math.cos(heading), 3.0 * math.sin(heading), 0.0, 0.0, 60.0, 3.0)
+    new, _ = ex._identify(meet(3.0, 0.0, [180, 60, 300], 180, 3.0))
+    (edge,) = [e for e in ex.map.edges() if new in (e.u, e.v)]
+    assert ex.map.node(node).ports[ports[port_deg]] == edge.id
+    assert ex.leaving == (node, ports[port_deg])

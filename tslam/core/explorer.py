@@ -129,6 +129,10 @@ class ExplorerParams:
     # Which departure the robot went out by: the bearing to where its way is first this far
     # from the node (``_left_by``).
     left_by_m: float = 0.8
+    # An arrival after an unexplored departure whose way out went clearly (by this margin)
+    # along another unexplored departure ends that one's edge (``_departure_taken``).
+    departure_taken: bool = True
+    departure_taken_margin_rad: float = math.radians(20.0)
     # A hypothesis that has predicted nothing for this many arrivals in a row is dropped: the
     # robot has gone where it cannot be tested, and "a new place" explains as much. This is
     # the paper's candidate sets, each holding only what adjoins the previous set.
@@ -473,7 +477,7 @@ class Explorer:
             went = self._went_otherwise(ev, a, f, j, length, known=False)
         if went is not None:
             return went
-        return self._new_edge(ev, seen, f, j, length)
+        return self._new_edge(ev, seen, f, self._departure_taken(f, j), length)
 
     def _bounced(self, ev: MeetPointReached) -> tuple[int, PortMap] | None:
         lv, p = self._last_visit, self.p
@@ -665,6 +669,15 @@ class Explorer:
         """The port of ``f``, the node just left, that the robot's recorded way went out by:
         the departure nearest the bearing to where the way is first ``left_by_m`` from the
         node, by dead reckoning over a metre or two. None if the way does not say."""
+        out = self._way_out(f)
+        if out is None:
+            return None
+        bearing, deps = out
+        return min(range(len(deps)), key=lambda p: _angdiff(deps[p], bearing))
+
+    def _way_out(self, f: int) -> tuple[float, list[float]] | None:
+        """The bearing of the recorded way out of ``f`` (``_left_by``) and the bearing of each
+        of ``f``'s ports as read on that visit, odometry frame."""
         lv, odo = self._last_visit, self._odo
         if lv is None or lv[0] != f or odo is None:
             return None
@@ -676,8 +689,27 @@ class Explorer:
         out = next(((u, v) for _, u, v in path.points if math.hypot(u - x, v - y) >= reach), None)
         if out is None:
             return None
-        bearing = math.atan2(out[1] - y, out[0] - x)
-        return min(range(len(pm.index)), key=lambda p: _angdiff(deps[pm.index[p]], bearing))
+        return math.atan2(out[1] - y, out[0] - x), [deps[i] for i in pm.index]
+
+    def _departure_taken(self, f: int, j: int) -> int:
+        """The unexplored departure of ``f`` the robot went out by: ``j`` as planned, unless
+        its recorded way out is clearly along another unexplored one. Leaving fig16's
+        corridor junction for the indent, the trace law took the corridor's two walls 0.15 m
+        out and went down the corridor; the edge was mapped as the indent's, and the robot
+        went lost when it came back up by the corridor's departure (seed 4, switch vertex)."""
+        out = self._way_out(f)
+        if out is None or not self.p.departure_taken:
+            return j
+        bearing, deps = out
+        p = min(range(len(deps)), key=lambda p: _angdiff(deps[p], bearing))
+        off = _angdiff(deps[p], bearing)
+        if p == j or self.map.node(f).ports[p] is not None:
+            return j
+        if off + self.p.departure_taken_margin_rad > _angdiff(deps[j], bearing):
+            return j
+        self._note(f"departure {j} of node {f} not held: went out by departure {p}")
+        self.leaving = (f, p)
+        return p
 
     def _junction_on_edge(
         self, ev: MeetPointReached, f: int, j: int, e: int, length: float
@@ -1099,7 +1131,7 @@ class Explorer:
             self._leave(b, 0)
             return
         if not self._walked_to_boundary(ev, length, back=True):
-            self._boundary_on_new_edge(ev, f, j, length)
+            self._boundary_on_new_edge(ev, f, self._departure_taken(f, j), length)
 
     def _boundary_bounce(self, ev: BoundaryReached, f: int, j: int, length: float | None) -> bool:
         """Back in the corner just left, moments later (the edge out of it was not held):
