@@ -697,8 +697,8 @@ class Explorer:
         corridor junction for the indent, the trace law took the corridor's two walls 0.15 m
         out and went down the corridor; the edge was mapped as the indent's, and the robot
         went lost when it came back up by the corridor's departure (seed 4, switch vertex)."""
-        out = self._way_out(f)
-        if out is None or not self.p.departure_taken:
+        out = self._way_out(f) if self.p.departure_taken else None
+        if out is None:
             return j
         bearing, deps = out
         p = min(range(len(deps)), key=lambda p: _angdiff(deps[p], bearing))

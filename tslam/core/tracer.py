@@ -151,10 +151,6 @@ class TracerParams:
     fast_ring_firings: float = 8.0  # ... on a ring whose transducers each fired this often
     left_meet_m: float = 0.35  # ... and one this close is the meet point just left: no homing
     left_meet_travel_m: float = 2.0  # ... unless the robot has travelled this far since
-    # ... or the point lies ahead on the way out, this far beyond the robot: the junction just
-    # left is behind it, and fig16's weak meet point, 0.36 m from the corridor's, is ahead
-    # (-1: off, the point just left is any point this close).
-    left_meet_ahead_m: float = -1.0
     approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
     approach_look_m: float = 0.5  # the arrival direction: from where the robot was this far back
     backoff_m: float = 0.25  # reverse this far from a contact before re-accessing ...
@@ -457,13 +453,8 @@ class Tracer:
         gone = odo.distance_m - (s.node_distance or 0.0)
         if s.left_meet is None or gone > p.left_meet_travel_m:
             return True  # a loop edge may lead back to it: after this much travel, home
-        if math.hypot(odo.x_m + cx - s.left_meet[0], odo.y_m + cy - s.left_meet[1]) > (
+        return math.hypot(odo.x_m + cx - s.left_meet[0], odo.y_m + cy - s.left_meet[1]) > (
             p.left_meet_m
-        ):
-            return True
-        t = s.tangent
-        return p.left_meet_ahead_m >= 0.0 and t is not None and (
-            cx * t[0] + cy * t[1] > p.left_meet_ahead_m
         )
 
     def _new_meet_ahead(self, obs: list[Obstacle], odo: Odometry) -> bool:

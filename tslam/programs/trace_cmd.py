@@ -60,8 +60,6 @@ _SETS: dict[str, dict[str, bool | float]] = {
     "place": {"place_radius_m": 0.4},
     "hold_on": {"home_hold_m": 0.6, "sweep_join_pieces": True, "sweep_shallow_bend": True},
     "coast": {"off_edge_coast_s": 1.0},
-    "ahead": {"left_meet_ahead_m": 0.05},
-    "settle7": {"settle_tol_m": 0.07},
     "keep": {"home_keep_m": 0.1},
     "vertex": {"sweep_vertex": True},
 }
