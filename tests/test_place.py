@@ -76,6 +76,7 @@ def test_radius_zero_reads_the_point_alone():
     assert place_obstacles(obs, near, radius_m=0.0, tol_m=0.05) == near
 
 
-def test_the_place_reading_is_a_switch_off_by_default():
-    assert TracerParams().place_radius_m == 0.0
+def test_the_place_reading_is_on_by_default_and_its_old_switch_still_runs():
+    assert TracerParams().place_radius_m == 0.4
+    assert tracer_params([]).place_radius_m == 0.4
     assert tracer_params(["place"]).place_radius_m == 0.4

@@ -11,8 +11,9 @@ import itertools
 import numpy as np
 import pytest
 
-from sim_backend.ground_truth import GroundTruthGVG, GvgEdge, GvgNode
-from sim_backend.trace_scoring import SeenEdge, SeenNode, score_trace
+from sim_backend.builtin_worlds import builtin_world
+from sim_backend.ground_truth import GroundTruthGVG, GvgEdge, GvgNode, compute_gvg
+from sim_backend.trace_scoring import SeenEdge, SeenNode, place_degrees, score_trace
 
 A, B, C = (0.0, 0.0), (0.3, 0.0), (0.15, 2.0)
 
@@ -93,3 +94,15 @@ def test_a_stay_unfinished_when_the_run_ends_is_not_scored():
     path = drive([A, (0.15, 1.0), C])  # ends on C: it may be homing yet
     report = score_trace(gvg, path, [SeenNode("meet", *A, 3, 0.0)], [])
     assert report["meet_point_passes"] == 1 and report["meet_point_passes_unhomed"] == 0
+
+
+@pytest.mark.parametrize(("degree", "ok"), [(3, 1.0), (4, 1.0), (5, 0.0), (2, 0.0)])
+def test_a_meet_point_of_a_close_pair_may_be_read_alone_or_with_its_place(degree, ok):
+    # fig1's meet points 6 and 7, 0.20 m apart: each has three edges, the place they make
+    # four; a sweep that reads the place (TracerParams.place_radius_m) sees four.
+    gvg = compute_gvg(builtin_world("fig1"))
+    assert place_degrees(gvg)[6] == 4 and place_degrees(gvg)[1] == 3
+    six = next(n for n in gvg.meet_points if n.id == 6)
+    seen = [SeenNode("meet", six.x, six.y, degree, 0.0)]
+    path = np.array([[six.x, six.y, 0.0]])
+    assert score_trace(gvg, path, seen, [])["degree_match_ratio"] == ok

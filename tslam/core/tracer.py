@@ -53,11 +53,11 @@ class TracerParams:
     degree_tol_m: float = 0.10  # d_k - d1 that counts obstacle k at a homed meet point
     # A homed meet point reads its place: the meet points this close that the sweep's
     # obstacles define count as one junction, with the edges of all of them (place.py; 0:
-    # the point alone). A seventh switch, off: it finds the edges that leave from the other
-    # point of a close pair (fig1's 0.20 m pair, fig14's lab door), but the sweep does not
-    # hear every obstacle of a place from each of its points, and a place read with four
-    # edges on one pass and three on another is two places to the explorer (README).
-    place_radius_m: float = 0.0
+    # the point alone). It finds the edges that leave from the other point of a close pair
+    # (fig1's 0.20 m pair, fig14's lab door). The sweep does not hear every obstacle of a
+    # place from each of its points, but the explorer now recognises a junction read with an
+    # edge more or fewer (``_read_otherwise``): on since stop 30 (README).
+    place_radius_m: float = 0.4
     place_tol_m: float = 0.05  # ... each equidistant to its three obstacles within this
     settle_tol_m: float = 0.03  # homing stops this close to the estimate
     converge_tol_m: float = 0.06  # ... and has converged if the sweep agrees this well

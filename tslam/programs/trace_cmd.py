@@ -57,7 +57,7 @@ _SETS: dict[str, dict[str, bool | float]] = {
     "sweep_fixed_frame": {"sweep_fixed_frame": True},
     "home_hold": {"home_hold_m": 0.15},
     "held_no_support": {},
-    "place": {"place_radius_m": 0.4},
+    "place": {"place_radius_m": 0.4},  # on by default since stop 30; older commands still run
     "hold_on": {"home_hold_m": 0.6, "sweep_join_pieces": True, "sweep_shallow_bend": True},
     "coast": {"off_edge_coast_s": 1.0},
     "keep": {"home_keep_m": 0.1},
