@@ -670,10 +670,7 @@ class Explorer:
         the departure nearest the bearing to where the way is first ``left_by_m`` from the
         node, by dead reckoning over a metre or two. None if the way does not say."""
         out = self._way_out(f)
-        if out is None:
-            return None
-        bearing, deps = out
-        return min(range(len(deps)), key=lambda p: _angdiff(deps[p], bearing))
+        return None if out is None else _nearest(*out)
 
     def _way_out(self, f: int) -> tuple[float, list[float]] | None:
         """The bearing of the recorded way out of ``f`` (``_left_by``) and the bearing of each
@@ -701,10 +698,10 @@ class Explorer:
         if out is None:
             return j
         bearing, deps = out
-        p = min(range(len(deps)), key=lambda p: _angdiff(deps[p], bearing))
-        off = _angdiff(deps[p], bearing)
+        p = _nearest(bearing, deps)
         if p == j or self.map.node(f).ports[p] is not None:
             return j
+        off = _angdiff(deps[p], bearing)
         if off + self.p.departure_taken_margin_rad > _angdiff(deps[j], bearing):
             return j
         self._note(f"departure {j} of node {f} not held: went out by departure {p}")
@@ -1784,6 +1781,11 @@ class Explorer:
 
     def _note(self, text: str) -> None:
         self.notes.append(Note(self._now, text))
+
+
+def _nearest(bearing: float, deps: list[float]) -> int:
+    """The index of the departure in ``deps`` nearest ``bearing``."""
+    return min(range(len(deps)), key=lambda p: _angdiff(deps[p], bearing))
 
 
 def _angdiff(a: float, b: float) -> float:
