@@ -79,6 +79,39 @@ def test_a_detour_off_the_edge_is_bridged():
     assert odo.length_to(4.0, 0.0) == pytest.approx(4.0, abs=0.01)
 
 
+def line(a: tuple[float, float], b: tuple[float, float], n: int = 101) -> np.ndarray:
+    return np.column_stack([np.linspace(a[0], b[0], n), np.linspace(a[1], b[1], n)])
+
+
+def test_tracing_past_the_end_node_and_back_is_not_the_edge():
+    """fig1 seed 1: the robot traced 0.3 m past the junction, then homed back onto it."""
+    odo = EdgeOdometer()
+    odo.start(0.0, 0.0)
+    travelled = drive(odo, line((0.0, 0.0), (2.0, 0.0)), np.zeros((101, 2)))
+    drive(odo, line((2.0, 0.0), (2.6, 0.0), 31), np.zeros((31, 2)), travelled)
+    assert odo.length_to(2.0, 0.0) == pytest.approx(2.0, abs=0.05)
+
+
+def test_a_stretch_along_other_walls_half_way_is_not_the_edge():
+    """fig1 seed 3: half way along, the robot traced into a doorway's walls for a while."""
+    odo = EdgeOdometer()
+    odo.start(0.0, 0.0)
+    travelled = drive(odo, line((0.0, 0.0), (3.0, 0.0)), np.zeros((101, 2)))
+    travelled = drive(odo, line((3.0, 0.8), (3.3, 0.8), 26), np.zeros((26, 2)), travelled + 1)
+    drive(odo, line((3.3, 0.0), (6.0, 0.0)), np.zeros((101, 2)), travelled + 1)
+    assert odo.length_to(6.0, 0.0) == pytest.approx(6.0, abs=0.05)
+
+
+def test_a_right_angle_bend_is_kept():
+    odo = EdgeOdometer()
+    odo.start(0.0, 0.0)
+    travelled = drive(odo, line((0.0, 0.0), (1.0, 0.0)), np.zeros((101, 2)))
+    drive(odo, line((1.0, 0.0), (1.0, 1.0)), np.zeros((101, 2)), travelled)
+    # The half-metre averages cut the corner by 0.15 m; dropping the corner's point would
+    # make it the diagonal, 1.41.
+    assert odo.length_to(1.0, 1.0) == pytest.approx(1.85, abs=0.01)
+
+
 def test_a_step_too_long_to_be_onto_this_edge_is_not_taken():
     odo = EdgeOdometer()
     odo.start(0.0, 0.0)

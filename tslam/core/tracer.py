@@ -146,6 +146,9 @@ class TracerParams:
     # wall's echo (six to ten of sixteen transducers fall silent in a corridor), and the
     # re-access it used to set off disturbed the edge's length. 0: re-access at once.
     off_edge_coast_s: float = 0.0
+    # An edge's length drops the points its chain goes out to and comes back from, at this
+    # ratio of chords (edgelength.py; inf: none dropped, as up to stop 30).
+    edge_spike_ratio: float = 1.5
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
     rejected_meet_m: float = 0.5  # ... or this far, from one the sweep rejected ...
     fast_ring_firings: float = 8.0  # ... on a ring whose transducers each fired this often
@@ -262,6 +265,7 @@ class Tracer:
         self.choose = choose
         self.sensor = RingSensor(self.p.sensing)
         self.s = _State()
+        self.s.odometer.detour_ratio = self.p.edge_spike_ratio
         self.obstacles: list[Obstacle] = []
         self._scan: SonarScan | None = None
 
