@@ -277,3 +277,27 @@ def test_an_edge_ends_the_unexplored_departure_the_way_out_took(way_deg, port_de
     (edge,) = [e for e in ex.map.edges() if new in (e.u, e.v)]
     assert ex.map.node(node).ports[ports[port_deg]] == edge.id
     assert ex.leaving == (node, ports[port_deg])
+
+
+@pytest.mark.parametrize(
+    ("length_m", "bearings_deg", "bounce"),
+    [
+        (0.06, [2, 92, 182], True),  # the same junction, one of its edges not heard
+        (0.5, [2, 92, 182], False),  # further on: a junction of its own
+        (0.06, [45, 135, 225], False),  # its edges elsewhere: not this junction
+    ],
+)
+def test_a_junction_read_again_with_an_edge_fewer_is_the_same_node(length_m, bearings_deg, bounce):
+    # fig13 seed 1: its 0.29 m pair read as one place with four edges; the robot set off,
+    # homed again 6 cm on, read three edges there, and the junction was mapped twice.
+    ex = Explorer(NOMAD200_LIMITS)
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    ex._choose(meet(0.0, 0.0, [0, 90, 180, 270], None, None))
+    node, port = ex.leaving
+    ex._odo = Odometry(0.05, 0.0, 0.0, 0.0, 9.0, length_m)
+    ex._choose(meet(0.05, 0.0, bearings_deg, bearings_deg[0], length_m))
+    assert len(ex.map.nodes()) == (1 if bounce else 2)
+    if bounce:
+        note = f"back at node {node}, read with 3 edges: departure {port} not held"
+        assert ex.notes[-1].text == note
+        assert ex.here == node

@@ -495,9 +495,10 @@ class Explorer:
             or not self.map.has_node(node)
             or (far and length > p.bounce_far_m)
             or math.hypot(ev.x_m - x, ev.y_m - y) > reach
-            or ev.degree != len(deps)
         ):
             return None
+        if ev.degree != len(deps):
+            return self._reread(ev, node, deps, pm) if length <= p.bounce_m else None
 
         # Same place, seconds later: absolute bearings still agree, so they fix the rotation.
         # A twin junction a few decimetres away has other bearings (one of its edges leads
@@ -519,6 +520,28 @@ class Explorer:
         self._count_bounce(key)
         self._note(f"back at node {node}: departure {key[1]} could not be held")
         return node, PortMap(pm.index, arrival)
+
+    def _reread(
+        self, ev: MeetPointReached, node: int, deps: tuple[float, ...], pm: PortMap
+    ) -> tuple[int, PortMap] | None:
+        """A bounce that reads the junction with another number of edges: the departure was
+        left within centimetres and the robot homed again, onto one point of a close pair
+        it had read as their place, or the other way round (fig13 seed 1: its 0.29 m pair
+        read with four edges, then 6 cm on with three, and mapped twice). Ports are matched
+        to departures by their absolute bearings, which a few seconds do not turn."""
+        now = ev.departures_rad
+        ports = [deps[i] for i in pm.index]
+        index = [min(range(ev.degree), key=lambda i, b=b: _angdiff(now[i], b)) for b in ports]
+        tol = self.p.bounce_angle_rad
+        agree = sum(_angdiff(now[i], b) <= tol for i, b in zip(index, ports, strict=True))
+        if agree < min(ev.degree, len(ports)) - 1:
+            return None
+        key = self.leaving
+        assert key is not None
+        arrival = next((q for q, i in enumerate(index) if i == ev.arrival_index), None)
+        self._count_bounce(key)
+        self._note(f"back at node {node}, read with {ev.degree} edges: departure {key[1]} not held")
+        return node, PortMap(tuple(index), arrival)
 
     def _expected(
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, e: int, length: float | None
