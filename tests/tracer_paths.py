@@ -13,12 +13,14 @@ import math
 from tslam.core.tracer import TracerParams
 
 #: Stop 25's tracer: tracing from 0.15 m out of a departure whatever the ring sees, an edge
-#: ended wherever a wall comes within 0.45 m, one sweep at every meet point, and an edge's
-#: length taken over its whole chain (stop 31 drops the chain's spikes: edgelength.py).
+#: ended wherever a wall comes within 0.45 m, one sweep at every meet point judged where the
+#: robot stands, and an edge's length taken over its whole chain (stop 31 judges the sweep
+#: at its estimate and drops the chain's spikes: edgelength.py).
 STOP25 = TracerParams(
     depart_until_sides_m=0.0,
     corner_ahead_m=math.inf,
     corner_ahead_rad=math.pi,
     sweep_again=False,
     edge_spike_ratio=math.inf,
+    spread_at_estimate=False,
 )
