@@ -301,3 +301,34 @@ def test_a_junction_read_again_with_an_edge_fewer_is_the_same_node(length_m, bea
         note = f"back at node {node}, read with 3 edges: departure {port} not held"
         assert ex.notes[-1].text == note
         assert ex.here == node
+
+
+@pytest.mark.parametrize("placed", [False, True])
+def test_the_point_just_left_read_again_with_more_edges_a_hop_on_is_its_place(placed):
+    # fig16 seed 3: the corridor's meet point read alone (up, down, and west into the
+    # indent), then the weak one 0.36 m west read with the place's four edges; mapped as a
+    # new node, and the corridor's point was mapped again when the robot came back to it.
+    ex = Explorer(NOMAD200_LIMITS)
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    ex._choose(meet(0.0, 0.0, [90, 180, 270], 270, None))
+    node = ex.here
+    deps = ex.map.node(node).departures_rad
+    ports = {round(math.degrees(deps[i])) % 360: i for i in range(3)}
+    down = ex.map.add_meet(1.0, (0.5, 1.5, 3.0), (0.0, -5.0))
+    edge = ex.map.connect(node, ports[270], down, 1, 5.0)
+    if placed:  # an open hypothesis says where the node is: its ports must stay as they are
+        other = ex.map.add_meet(1.1, deps, (9.0, 9.0))
+        ex.hyps.live.append(Hypothesis({node: (other, 0)}))
+    ex._leave(node, ports[180])
+    ex._last_visit = (node, deps, PortMap.rotation(0, 3, None), 0.0, 0.0)
+    ex._odo = Odometry(-0.36, 0.0, 0.0, 0.0, 30.0, 0.36)
+    ex._identify(meet(-0.36, 0.0, [90, 135, 225, 270], 90, 0.36))
+    assert len([n for n in ex.map.nodes() if n.kind == "meet"]) == (3 if placed else 2)
+    place = ex.map.node(node)
+    if placed:
+        assert place.degree == 3
+    else:
+        assert place.degree == 4
+        assert ex.notes[-1].text == f"node {node} read again as its place, with 4 edges"
+        assert place.ports[3] == edge and ex.map.edge(edge).other_end(down, 1) == (node, 3)
+        assert ex.map.unexplored()[:3] == [(node, 0), (node, 1), (node, 2)]

@@ -150,6 +150,39 @@ def test_split_edge_puts_a_missed_junction_on_the_edge():
     assert m.unexplored() == [(w, 0), (w, 2), (j, 1)]
 
 
+def test_a_meet_node_read_again_as_its_place_keeps_its_edges_on_their_bearings():
+    m = TopoMap()
+    n = m.add_meet(1.1, [math.pi / 2, math.pi, 3 * math.pi / 2], pose=(0, 0))
+    up = m.add_boundary(0.4, pose=(0, 5))
+    loop_meet = m.add_meet(1.0, [0.0, 1.0, 2.0], pose=(0, -5))
+    e_up = m.connect(n, 0, up, 0, 5.0)
+    e_down = m.connect(n, 2, loop_meet, 1, 5.0)
+    place = [math.pi / 2, 3 * math.pi / 4, 5 * math.pi / 4, 3 * math.pi / 2]
+    m.reread(n, place, 0.9, {0: 0, 2: 3})  # port 1 (west) led inside the place
+    assert m.node(n).degree == 4 and m.node(n).clearance_m == 0.9
+    assert m.node(n).ports == (e_up, None, None, e_down)
+    assert m.edge(e_down).other_end(loop_meet, 1) == (n, 3)
+    assert m.unexplored() == [(n, 1), (n, 2), (loop_meet, 0), (loop_meet, 2)]
+    assert m.changes[-1].op == "node_reread"
+    json.dumps(m.changes[-1].data)
+    assert TopoMap.from_dict(m.to_dict()).node(n).ports == (e_up, None, None, e_down)
+
+
+@pytest.mark.parametrize(
+    ("carry", "why"),
+    [({0: 0}, "port 2's edge"), ({0: 0, 2: 0}, "port 2's edge"), ({0: 0, 2: 4}, "port 2's edge")],
+)
+def test_reading_a_node_again_refuses_to_lose_an_edge(carry, why):
+    m = TopoMap()
+    n = m.add_meet(1.1, [1.0, 2.0, 3.0], pose=(0, 0))
+    for p in (0, 2):
+        m.connect(n, p, m.add_boundary(0.4, pose=(p, 1)), 0, 1.0)
+    before = m.to_dict()
+    with pytest.raises(ValueError, match=why):
+        m.reread(n, [0.5, 1.5, 2.5, 3.5], 1.0, carry)
+    assert m.to_dict() == before
+
+
 @pytest.mark.parametrize(
     "ports, at, why",
     [

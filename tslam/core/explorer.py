@@ -122,6 +122,9 @@ class ExplorerParams:
     bounce_far_m: float = 20.0
     bounce_rel: float = 0.02
     bounce_retries: int = 1
+    # Homed again this close after leaving a meet point, and read with another number of
+    # edges: the two points are one place (``Explorer._reread``, ``_read_place``).
+    place_hop_m: float = 0.45
     # An edge whose length is a walk's remainder is matched with this much more slack, until
     # a traversal measures it: fig12 seed 10 mapped a dead end at 1.17 m so and, back along
     # it, homed at its junction after 1.55 m, 4 cm beyond the tolerance, and went lost.
@@ -490,15 +493,19 @@ class Explorer:
         # back along its long edge, and the junction was mapped again).
         far = length > p.bounce_length_m
         reach = p.bounce_m + (p.bounce_rel * length if far else 0.0)
-        if (
-            node != self.leaving[0]
-            or not self.map.has_node(node)
-            or (far and length > p.bounce_far_m)
-            or math.hypot(ev.x_m - x, ev.y_m - y) > reach
-        ):
+        if node != self.leaving[0] or not self.map.has_node(node):
             return None
         if ev.degree != len(deps):
-            return self._reread(ev, node, deps, pm) if length <= p.bounce_m else None
+            hop = max(length, math.hypot(ev.x_m - x, ev.y_m - y))
+            if hop > p.place_hop_m:
+                return None
+            if ev.degree > len(deps) and ev.degree >= self.map.node(node).degree:
+                placed = self._read_place(ev, node)
+                if placed is not None:
+                    return placed
+            return self._reread(ev, node, deps, pm)
+        if (far and length > p.bounce_far_m) or math.hypot(ev.x_m - x, ev.y_m - y) > reach:
+            return None
 
         # Same place, seconds later: absolute bearings still agree, so they fix the rotation.
         # A twin junction a few decimetres away has other bearings (one of its edges leads
@@ -542,6 +549,37 @@ class Explorer:
         self._count_bounce(key)
         self._note(f"back at node {node}, read with {ev.degree} edges: departure {key[1]} not held")
         return node, PortMap(tuple(index), arrival)
+
+    def _read_place(self, ev: MeetPointReached, node: int) -> tuple[int, PortMap] | None:
+        """The meet point just left, a few decimetres back, read with more edges from here:
+        the two are one place, and the node becomes the place (fig16 seed 3: the corridor's
+        meet point read alone with three edges, then the weak one 0.36 m on with the
+        place's four, mapped as a new node; the robot came back to the first and mapped it
+        again). Its explored ports move to the place's departures by absolute bearing; its
+        unexplored ones that match none led inside the place. Not while a hypothesis places
+        the node: its rotation would not survive the new ports."""
+        n = self.map.node(node)
+        now, tol = ev.departures_rad, self.p.bounce_angle_rad
+        carry: dict[int, int] = {}
+        for p, b in enumerate(n.departures_rad):
+            i = min(range(ev.degree), key=lambda i: _angdiff(now[i], b))
+            if _angdiff(now[i], b) <= tol and i not in carry.values():
+                carry[p] = i
+        explored = [p for p, e in enumerate(n.ports) if e is not None]
+        placed = any(
+            node in h.mapping or any(c == node for c, _ in h.mapping.values())
+            for h in self.hyps.live
+        )
+        if placed or len(carry) < n.degree - 1 or any(p not in carry for p in explored):
+            return None
+        self.map.reread(node, now, ev.clearance_m, carry)
+        if self._odo is not None:
+            self.born[node] = self._odo.distance_m
+        self.frozen = {(x, carry[p]) if x == node else (x, p) for x, p in self.frozen
+                       if x != node or p in carry}  # fmt: skip
+        self.bounces = {k: v for k, v in self.bounces.items() if k[0] != node}
+        self._note(f"node {node} read again as its place, with {ev.degree} edges")
+        return node, PortMap(tuple(range(ev.degree)), None)
 
     def _expected(
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, e: int, length: float | None
@@ -856,8 +894,10 @@ class Explorer:
     ) -> PortMap | None:
         """The port map if the meet point at the end of a known edge is its node read with
         one edge more or fewer (section VII-B's close meet points, a weak meet point): the
-        edge's length agrees (only as a lower bound after a detour), so does the clearance,
-        and so do the angles of all but the edge that differs."""
+        edge's length agrees (only as a lower bound after a detour), so do the angles of all
+        but the edge that differs, and so does the clearance, as far as two points of one
+        place can differ: fig16's two are 0.91 m and 1.14 m clear, and its place, read at the
+        weak one, was not recognised at the corridor's one."""
         tol, wn = self._tol(), self.map.node(w)
         if (
             ev.arrival_index is None
@@ -865,7 +905,7 @@ class Explorer:
             or length is None
             or wn.kind != "meet"
             or not tol.length_ok(length, mapped)
-            or abs(ev.clearance_m - wn.clearance_m) > tol.clearance_m
+            or abs(ev.clearance_m - wn.clearance_m) > tol.clearance_m + self.p.place_hop_m / 2
         ):
             return None
         return match_by_angle(

@@ -23,7 +23,7 @@ from __future__ import annotations
 import itertools
 import math
 import statistics
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, NamedTuple
 
@@ -414,6 +414,43 @@ class TopoMap:
         self._nodes[n] = replace(node, ambiguous_with=new)
         sets = [[t, sorted(self._nodes[t].ambiguous_with)] for t in sorted(touched)]
         self._record("ambiguity", {"sets": sets})
+
+    def reread(
+        self, n: int, departures_rad: Sequence[float], clearance_m: float, carry: Mapping[int, int]
+    ) -> None:
+        """Meet node ``n`` read again as the place it is part of (section VII-B's close meet
+        points): its departures become ``departures_rad``; the edge on each explored port
+        ``p`` moves to port ``carry[p]``. Unexplored ports not carried are dropped: they led
+        inside the place."""
+        node = self.node(n)
+        deps = tuple(float(d) for d in departures_rad)
+        if node.kind != "meet" or list(deps) != sorted(deps):
+            raise ValueError(f"node {n}: only a meet node is read again, departures ascending")
+        ports: list[int | None] = [None] * len(deps)
+        for p, e in enumerate(node.ports):
+            if e is None:
+                continue
+            q = carry.get(p)
+            if q is None or not 0 <= q < len(deps) or ports[q] is not None:
+                raise ValueError(f"node {n}: port {p}'s edge {e} has no port of its own")
+            ports[q] = e
+        for e in set(node.ports) - {None}:
+            old = self._edges[e]  # a loop edge has both its ends here
+            self._edges[e] = replace(
+                old,
+                port_u=carry[old.port_u] if old.u == n else old.port_u,
+                port_v=carry[old.port_v] if old.v == n else old.port_v,
+            )
+        self._nodes[n] = replace(
+            node, departures_rad=deps, ports=tuple(ports), clearance_m=float(clearance_m)
+        )
+        self._record(
+            "node_reread",
+            {
+                "node": node_to_dict(self._nodes[n]),
+                "edges": [edge_to_dict(self._edges[e]) for e in sorted(set(ports) - {None})],
+            },
+        )
 
     def remove_node(self, n: int) -> None:
         """Forget a node and its edges; their far ends become unexplored again."""
