@@ -22,7 +22,7 @@ from tslam.core.localize import Hypothesis
 from tslam.core.tracer import MeetPointReached
 
 TAU = 2 * math.pi
-PAST = ExplorerParams(cut_past=True)  # off by default: see ExplorerParams
+PAST = ExplorerParams(cut_past=True)
 # No two alike under any rotation but the identity, so each test has one reading.
 A_DEPS = [0, 100, 230]  # A: its departure 0 deg leads east
 M_DEPS = [0, 90, 180]  # M: the junction east of A, a branch north
@@ -78,7 +78,7 @@ def test_a_prediction_shorter_than_its_edge_keeps_the_hypothesis_and_cuts_the_ed
 
 
 def test_without_the_repair_that_hypothesis_is_refuted():
-    ex = Explorer(NOMAD200_LIMITS)  # cut_past is off by default
+    ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(cut_past=False))
     a, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.6, B_DEPS, 4.0)
     ex.map.connect(a, 0, b, 1, 4.0)
     _x, h = _x_is_a_again(ex, a)
