@@ -175,11 +175,16 @@ def test_a_meet_node_read_again_as_its_place_keeps_its_edges_on_their_bearings()
 def test_reading_a_node_again_refuses_to_lose_an_edge(carry, why):
     m = TopoMap()
     n = m.add_meet(1.1, [1.0, 2.0, 3.0], pose=(0, 0))
-    for p in (0, 2):
-        m.connect(n, p, m.add_boundary(0.4, pose=(p, 1)), 0, 1.0)
+    ends = [m.add_boundary(0.4, pose=(p, 1)) for p in (0, 2)]
+    for p, b in zip((0, 2), ends, strict=True):
+        m.connect(n, p, b, 0, 1.0)
     before = m.to_dict()
-    with pytest.raises(ValueError, match=why):
+    with pytest.raises(MapError, match=why):
         m.reread(n, [0.5, 1.5, 2.5, 3.5], 1.0, carry)
+    with pytest.raises(MapError, match="ascending"):
+        m.reread(n, [1.5, 0.5, 2.5, 3.5], 1.0, {0: 0, 2: 2})
+    with pytest.raises(MapError, match="boundary node"):
+        m.reread(ends[0], [0.5], 1.0, {0: 0})
     assert m.to_dict() == before
 
 

@@ -531,11 +531,13 @@ class Explorer:
     def _reread(
         self, ev: MeetPointReached, node: int, deps: tuple[float, ...], pm: PortMap
     ) -> tuple[int, PortMap] | None:
-        """A bounce that reads the junction with another number of edges: the departure was
-        left within centimetres and the robot homed again, onto one point of a close pair
-        it had read as their place, or the other way round (fig13 seed 1: its 0.29 m pair
-        read with four edges, then 6 cm on with three, and mapped twice). Ports are matched
-        to departures by their absolute bearings, which a few seconds do not turn."""
+        """The junction just left, read again within ``place_hop_m`` with another number of
+        edges: the robot homed again, onto one point of a close pair it had read as their
+        place, or onto the place whose point it had read alone (when ``_read_place`` may not
+        make the node the place) (fig13 seed 1: its 0.29 m pair read with four edges, then
+        6 cm on with three, and mapped twice). The robot stands at the node; its ports are
+        matched to the departures by their absolute bearings, which a few seconds do not
+        turn."""
         now = ev.departures_rad
         ports = [deps[i] for i in pm.index]
         index = [min(range(ev.degree), key=lambda i, b=b: _angdiff(now[i], b)) for b in ports]
@@ -575,8 +577,8 @@ class Explorer:
         self.map.reread(node, now, ev.clearance_m, carry)
         if self._odo is not None:
             self.born[node] = self._odo.distance_m
-        self.frozen = {(x, carry[p]) if x == node else (x, p) for x, p in self.frozen
-                       if x != node or p in carry}  # fmt: skip
+        kept = {(x, p) for x, p in self.frozen if x != node or p in carry}
+        self.frozen = {(x, carry[p]) if x == node else (x, p) for x, p in kept}
         self.bounces = {k: v for k, v in self.bounces.items() if k[0] != node}
         self._note(f"node {node} read again as its place, with {ev.degree} edges")
         return node, PortMap(tuple(range(ev.degree)), None)

@@ -5,7 +5,8 @@ trust dead reckoning for: each node's clearance and the departure angles of its 
 edge leaves by which departure ("port"), and every encoder length measured along each edge.
 A node's dead-reckoned pose is kept for drawing and for the naive baseline of section IV
 only; no operation here reads it. Departures are in the odometry frame of the first visit,
-counter-clockwise and ascending, so a port index is stable for the life of the node.
+counter-clockwise and ascending, so a port index is stable for the life of the node, unless
+the node is read again as the close pair's place it is part of (``reread``).
 
 Two meet points may be joined by two edges, and an edge may come back to the node it left,
 so the graph underneath is a networkx ``MultiGraph`` keyed by edge id. Nodes and edges are
@@ -423,16 +424,17 @@ class TopoMap:
         ``p`` moves to port ``carry[p]``. Unexplored ports not carried are dropped: they led
         inside the place."""
         node = self.node(n)
-        deps = tuple(float(d) for d in departures_rad)
-        if node.kind != "meet" or list(deps) != sorted(deps):
-            raise ValueError(f"node {n}: only a meet node is read again, departures ascending")
+        if node.kind != "meet":
+            raise MapError(f"node {n} is a {node.kind} node: only a meet node is read again")
+        deps = _departures(departures_rad, "departures_rad", MapError)
+        clearance = _number(clearance_m, "clearance_m", lo=0.0)
         ports: list[int | None] = [None] * len(deps)
         for p, e in enumerate(node.ports):
             if e is None:
                 continue
             q = carry.get(p)
             if q is None or not 0 <= q < len(deps) or ports[q] is not None:
-                raise ValueError(f"node {n}: port {p}'s edge {e} has no port of its own")
+                raise MapError(f"node {n}: port {p}'s edge {e} has no port of its own")
             ports[q] = e
         for e in set(node.ports) - {None}:
             old = self._edges[e]  # a loop edge has both its ends here
@@ -442,7 +444,7 @@ class TopoMap:
                 port_v=carry[old.port_v] if old.v == n else old.port_v,
             )
         self._nodes[n] = replace(
-            node, departures_rad=deps, ports=tuple(ports), clearance_m=float(clearance_m)
+            node, departures_rad=deps, ports=tuple(ports), clearance_m=clearance
         )
         self._record(
             "node_reread",
