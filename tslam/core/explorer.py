@@ -45,7 +45,7 @@ from __future__ import annotations
 import copy
 import enum
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
@@ -495,16 +495,16 @@ class Explorer:
         reach = p.bounce_m + (p.bounce_rel * length if far else 0.0)
         if node != self.leaving[0] or not self.map.has_node(node):
             return None
+        moved = math.hypot(ev.x_m - x, ev.y_m - y)
         if ev.degree != len(deps):
-            hop = max(length, math.hypot(ev.x_m - x, ev.y_m - y))
-            if hop > p.place_hop_m:
+            if max(length, moved) > p.place_hop_m:
                 return None
             if ev.degree > len(deps) and ev.degree >= self.map.node(node).degree:
                 placed = self._read_place(ev, node)
                 if placed is not None:
                     return placed
             return self._reread(ev, node, deps, pm)
-        if (far and length > p.bounce_far_m) or math.hypot(ev.x_m - x, ev.y_m - y) > reach:
+        if (far and length > p.bounce_far_m) or moved > reach:
             return None
 
         # Same place, seconds later: absolute bearings still agree, so they fix the rotation.
@@ -540,7 +540,7 @@ class Explorer:
         turn."""
         now = ev.departures_rad
         ports = [deps[i] for i in pm.index]
-        index = [min(range(ev.degree), key=lambda i, b=b: _angdiff(now[i], b)) for b in ports]
+        index = [_nearest(b, now) for b in ports]
         tol = self.p.bounce_angle_rad
         agree = sum(_angdiff(now[i], b) <= tol for i, b in zip(index, ports, strict=True))
         if agree < min(ev.degree, len(ports)) - 1:
@@ -564,7 +564,7 @@ class Explorer:
         now, tol = ev.departures_rad, self.p.bounce_angle_rad
         carry: dict[int, int] = {}
         for p, b in enumerate(n.departures_rad):
-            i = min(range(ev.degree), key=lambda i: _angdiff(now[i], b))
+            i = _nearest(b, now)
             if _angdiff(now[i], b) <= tol and i not in carry.values():
                 carry[p] = i
         explored = [p for p, e in enumerate(n.ports) if e is not None]
@@ -1848,7 +1848,7 @@ class Explorer:
         self.notes.append(Note(self._now, text))
 
 
-def _nearest(bearing: float, deps: list[float]) -> int:
+def _nearest(bearing: float, deps: Sequence[float]) -> int:
     """The index of the departure in ``deps`` nearest ``bearing``."""
     return min(range(len(deps)), key=lambda p: _angdiff(deps[p], bearing))
 
