@@ -177,6 +177,9 @@ class ExplorerParams:
     # A hypothesis's crowd counts every old node that looks like the new one, even those whose
     # departure the robot came by is already explored (``Explorer._crowd``).
     crowd_all_ports: bool = True
+    # A rival placement of the fragment may join two unexplored departures of the map by one
+    # of its edges (placements.py, ``open_edges``).
+    open_rivals: bool = False
     # Edges that went past a junction without homing there: a hypothesis whose prediction
     # failed on the edge's length alone, as such an edge explains, is kept; a new node may
     # be an old one whose departure the robot came by is explored by such an edge; a merge
@@ -1345,7 +1348,9 @@ class Explorer:
         view = self._view(h)
         old = {x: ck for x, ck in h.mapping.items() if x not in self.hyps.fragment}
         if not old:
-            return other_placements(view, h, self.p.tol, fits=self._heading_fits)
+            return other_placements(
+                view, h, self.p.tol, fits=self._heading_fits, open_edges=self.p.open_rivals
+            )
         merged = self._merged_copy(old, view)
         if merged is None:
             return [], False
@@ -1357,7 +1362,11 @@ class Explorer:
             rc, sc = renamed.get(c, (c, 0))
             mapping[x] = (rc, (k + sc) % trial.node(rc).degree)
         return other_placements(
-            trial, replace(h, mapping=mapping), self.p.tol, fits=self._heading_fits
+            trial,
+            replace(h, mapping=mapping),
+            self.p.tol,
+            fits=self._heading_fits,
+            open_edges=self.p.open_rivals,
         )
 
     def _fold_implied(self, tested: list[Hypothesis]) -> list[Hypothesis]:

@@ -9,11 +9,20 @@ tested part, its nodes and the edges between them, is placed on the map afresh, 
 it fits: every other placement is a hypothesis the evidence does not exclude. In a building
 whose wings mirror each other (fig15) that is the rule, and the ambiguity is then recorded
 rather than guessed at.
+
+With ``open_edges`` a fragment edge may also fall between two old departures that are both
+unexplored: the map cannot say those two places are not joined so. In fig15 at drift
+``severe`` (seed 2) the corner the robot had come back to was mapped with two of its
+edges untraced, while a rotated corner was mapped with all four, and dead reckoning had
+turned by as much as the rotation: the fragment fit the rotated one alone, and was merged
+there. Such a placement still needs one edge of the map matched, or it says no more than
+that the nodes look alike (the hypothesis's crowd counts those).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 
 from tslam.core.localize import Hypothesis, Tolerances
 from tslam.core.signature import rotations
@@ -30,6 +39,7 @@ def other_placements(
     limit: int = 4,
     budget: int = 20000,
     fits: PairFit | None = None,
+    open_edges: bool = False,
 ) -> tuple[list[Placement], bool] | None:
     """Up to ``limit`` placements of ``h``'s fragment nodes other than ``h``'s own that fit
     the map as well, and whether ``h``'s own fits (an edge measured with a detour matched
@@ -38,7 +48,7 @@ def other_placements(
     """
     nodes = [x for x in h.mapping if tmap.has_node(x)]
     own = {x: h.mapping[x] for x in nodes}
-    found = placements(tmap, nodes, tol, limit + 1, budget, fits)
+    found = placements(tmap, nodes, tol, limit + 1, budget, fits, open_edges)
     if found is None:
         return None
     others = [p for p in found if p != own]
@@ -52,6 +62,7 @@ def placements(
     limit: int,
     budget: int = 20000,
     fits: PairFit | None = None,
+    open_edges: bool = False,
 ) -> list[Placement] | None:
     """Up to ``limit`` placements of ``nodes`` and the edges between them on the map's
     other nodes, each pair passing ``fits`` if given; None if the search ran out of
@@ -59,8 +70,11 @@ def placements(
     links = _links(tmap, nodes)
     order = _order(nodes, links)
     found: list[Placement] = []
+    search = _Search(tmap, order, links, set(nodes), tol, fits, open_edges, [budget])
     try:
-        for placement in _place(tmap, order, links, set(nodes), tol, {}, [budget], fits):
+        for placement in search.place({}):
+            if open_edges and not search.matches(placement):
+                continue
             found.append(placement)
             if len(found) >= limit:
                 break
@@ -107,89 +121,91 @@ def _order(nodes: list[int], links: dict[int, list[tuple[int, int, int, float]]]
     return seen
 
 
-def _place(
-    tmap: TopoMap,
-    order: list[int],
-    links: dict[int, list[tuple[int, int, int, float]]],
-    placed: set[int],
-    tol: Tolerances,
-    done: Placement,
-    budget: list[int],
-    fits: PairFit | None,
-) -> Iterator[Placement]:
-    if len(done) == len(order):
-        yield dict(done)
-        return
-    x = order[len(done)]
-    used = {c for c, _ in done.values()}
-    for c, k in _options(tmap, x, links, placed, tol, done):
-        budget[0] -= 1
-        if budget[0] < 0:
-            raise _BudgetError
-        if c in used or c in placed:
-            continue
-        if not _edges_fit(tmap, x, c, k, links, tol, done):
-            continue
-        if fits is not None and not fits(x, c, k):
-            continue
-        done[x] = (c, k)
-        yield from _place(tmap, order, links, placed, tol, done, budget, fits)
-        del done[x]
+@dataclass
+class _Search:
+    tmap: TopoMap
+    order: list[int]
+    links: dict[int, list[tuple[int, int, int, float]]]
+    placed: set[int]
+    tol: Tolerances
+    fits: PairFit | None
+    open_edges: bool
+    budget: list[int]
 
-
-def _options(
-    tmap: TopoMap,
-    x: int,
-    links: dict[int, list[tuple[int, int, int, float]]],
-    placed: set[int],
-    tol: Tolerances,
-    done: Placement,
-) -> Iterator[tuple[int, int]]:
-    """Where ``x`` could go: led by an edge from a placed neighbour, else anywhere it looks
-    alike."""
-    sig = tmap.signature(x)
-    for p, y, q, _ in links[x]:
-        if y not in done:
-            continue
-        cy, ky = done[y]
-        e = tmap.node(cy).ports[(q + ky) % tmap.node(cy).degree]
-        if e is None:
+    def place(self, done: Placement) -> Iterator[Placement]:
+        if len(done) == len(self.order):
+            yield dict(done)
             return
-        c, r = tmap.edge(e).other_end(cy, (q + ky) % tmap.node(cy).degree)
-        k = (r - p) % tmap.node(c).degree
-        if k in rotations(sig, tmap.signature(c), tol.clearance_m, tol.angle_rad):
-            yield c, k
-        return
-    for other in tmap.nodes():
-        if other.id in placed:
-            continue
-        for k in rotations(sig, tmap.signature(other.id), tol.clearance_m, tol.angle_rad):
-            yield other.id, k
+        x = self.order[len(done)]
+        used = {c for c, _ in done.values()}
+        for c, k in self._options(x, done):
+            self.budget[0] -= 1
+            if self.budget[0] < 0:
+                raise _BudgetError
+            if c in used or c in self.placed:
+                continue
+            if not self._edges_fit(x, c, k, done):
+                continue
+            if self.fits is not None and not self.fits(x, c, k):
+                continue
+            done[x] = (c, k)
+            yield from self.place(done)
+            del done[x]
 
+    def matches(self, placement: Placement) -> bool:
+        """Whether some edge between the placed nodes is an edge of the map."""
+        tmap = self.tmap
+        for x, (c, k) in placement.items():
+            for p, _, _, _ in self.links[x]:
+                if tmap.node(c).ports[(p + k) % tmap.node(c).degree] is not None:
+                    return True
+        return False
 
-def _edges_fit(
-    tmap: TopoMap,
-    x: int,
-    c: int,
-    k: int,
-    links: dict[int, list[tuple[int, int, int, float]]],
-    tol: Tolerances,
-    done: Placement,
-) -> bool:
-    """Every edge from ``x`` to a placed node is an edge of the map, port for port, of a
-    length within tolerance."""
-    deg = tmap.node(c).degree
-    for p, y, q, length in links[x]:
-        if y not in done and y != x:
-            continue
-        cy, ky = done[y] if y != x else (c, k)
-        e = tmap.node(c).ports[(p + k) % deg]
-        if e is None:
-            return False
-        edge = tmap.edge(e)
-        w, r = edge.other_end(c, (p + k) % deg)
-        if w != cy or r != (q + ky) % tmap.node(cy).degree:
-            return False
-        if not tol.length_ok(length, edge.length_m):
-            return False
-    return True
+    def _options(self, x: int, done: Placement) -> Iterator[tuple[int, int]]:
+        """Where ``x`` could go: led by an edge from a placed neighbour, else anywhere it
+        looks alike."""
+        tmap, tol = self.tmap, self.tol
+        sig = tmap.signature(x)
+        for p, y, q, _ in self.links[x]:
+            if y not in done:
+                continue
+            cy, ky = done[y]
+            e = tmap.node(cy).ports[(q + ky) % tmap.node(cy).degree]
+            if e is None:
+                if not self.open_edges:
+                    return
+                break  # anywhere alike with that departure unexplored (_edges_fit)
+            c, r = tmap.edge(e).other_end(cy, (q + ky) % tmap.node(cy).degree)
+            k = (r - p) % tmap.node(c).degree
+            if k in rotations(sig, tmap.signature(c), tol.clearance_m, tol.angle_rad):
+                yield c, k
+            return
+        for other in tmap.nodes():
+            if other.id in self.placed:
+                continue
+            for k in rotations(sig, tmap.signature(other.id), tol.clearance_m, tol.angle_rad):
+                yield other.id, k
+
+    def _edges_fit(self, x: int, c: int, k: int, done: Placement) -> bool:
+        """Every edge from ``x`` to a placed node is an edge of the map, port for port, of
+        a length within tolerance; with ``open_edges``, or joins two unexplored
+        departures."""
+        tmap = self.tmap
+        deg = tmap.node(c).degree
+        for p, y, q, length in self.links[x]:
+            if y not in done and y != x:
+                continue
+            cy, ky = done[y] if y != x else (c, k)
+            e = tmap.node(c).ports[(p + k) % deg]
+            if e is None:
+                far = tmap.node(cy).ports[(q + ky) % tmap.node(cy).degree]
+                if self.open_edges and far is None and (cy, ky) != (c, k):
+                    continue
+                return False
+            edge = tmap.edge(e)
+            w, r = edge.other_end(c, (p + k) % deg)
+            if w != cy or r != (q + ky) % tmap.node(cy).degree:
+                return False
+            if not self.tol.length_ok(length, edge.length_m):
+                return False
+        return True
