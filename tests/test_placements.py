@@ -107,3 +107,11 @@ def test_a_placement_on_open_edges_alone_is_no_rival():
     x, y, z = chain(tmap, 3.05, 4.05)
     h = Hypothesis({x: (a1, 0), y: (b1, 0), z: (c1, 0)}, confirmed=2)
     assert other_placements(tmap, h, Tolerances(), open_edges=True) == ([], True)
+
+
+def test_a_single_node_fragment_fits_where_it_looks_alike_with_open_edges():
+    tmap = TopoMap()
+    a1, _, _ = chain(tmap, 3.0, 4.0)
+    x = tmap.add_meet(1.0, Y, (0.0, 0.0))
+    search = other_placements(tmap, Hypothesis({x: (a1, 0)}), Tolerances(), open_edges=True)
+    assert search is not None and search[1]

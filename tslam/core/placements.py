@@ -153,13 +153,16 @@ class _Search:
             del done[x]
 
     def matches(self, placement: Placement) -> bool:
-        """Whether some edge between the placed nodes is an edge of the map."""
+        """Whether some edge between the placed nodes is an edge of the map, or there are
+        no such edges to match."""
         tmap = self.tmap
+        links = 0
         for x, (c, k) in placement.items():
             for p, _, _, _ in self.links[x]:
+                links += 1
                 if tmap.node(c).ports[(p + k) % tmap.node(c).degree] is not None:
                     return True
-        return False
+        return links == 0
 
     def _options(self, x: int, done: Placement) -> Iterator[tuple[int, int]]:
         """Where ``x`` could go: led by an edge from a placed neighbour, else anywhere it
