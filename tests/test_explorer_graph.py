@@ -216,12 +216,13 @@ def test_a_mirror_image_that_a_junction_passed_unhomed_leaves_is_refused_by_head
     # it refutes the right placement of what the robot maps next, and the mirror wing, half a
     # turn away, is then the only place it fits. Topology cannot refuse that merge; dead
     # reckoning's heading, good to a few degrees over the distance walked, does.
+    # (Rival placements on untraced edges, tests/test_explorer_rivals.py, are left out.)
     gvg = compute_gvg(load_world("fig15"))
     graph = from_ground_truth(gvg)
     start = next(n for n, v in graph.nodes.items() if v[0] == "meet")
     merges = {}
     for read in (True, False):
-        ex = Explorer(NOMAD200_LIMITS)
+        ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(open_rivals=False))
         walk(
             graph, ex, start, max_arrivals=300, noise=0.03, seed=1, drift_deg_per_edge=0.5,
             passed=passed_once(graph, junction),
@@ -231,3 +232,4 @@ def test_a_mirror_image_that_a_junction_passed_unhomed_leaves_is_refused_by_head
         if read:
             assert any("turned further than dead reckoning drifts" in n.text for n in ex.notes)
     assert merges[True] == 0 and merges[False] > 0
+

@@ -179,7 +179,7 @@ class ExplorerParams:
     crowd_all_ports: bool = True
     # A rival placement of the fragment may join two unexplored departures of the map by one
     # of its edges (placements.py, ``open_edges``).
-    open_rivals: bool = False
+    open_rivals: bool = True
     # Edges that went past a junction without homing there: a hypothesis whose prediction
     # failed on the edge's length alone, as such an edge explains, is kept; a new node may
     # be an old one whose departure the robot came by is explored by such an edge; a merge
@@ -244,6 +244,7 @@ class Explorer:
         self._resuming = len(self.map.nodes()) > 0  # the first node is matched to the stored map
         self.tracer = Tracer(limits, tracer_params, choose=self._choose)
         self.hyps = Hypotheses()
+        self._held: set[int] = set()  # hypotheses noted as waiting on untraced rivals
         self.truth = truth
         self.here: int | None = None  # the node the robot is at or last left
         self.leaving: tuple[int, int] | None = None  # (node, port) being traced
@@ -1295,7 +1296,18 @@ class Explorer:
                 return {}
             rivals, own_fits = search
             if not rivals and own_fits:
-                return self._merge(h)
+                untraced = [] if h.resumed else self._untraced_rivals(h)
+                if not untraced:
+                    return self._merge(h)
+                # Not rivals to test: they inherit no evidence (their edges are untraced),
+                # and one merged when ``h`` fell would be a guess. ``h`` waits for them to go.
+                if id(h) not in self._held:
+                    self._held.add(id(h))
+                    self._note(
+                        f"node {node}: the evidence also fits {len(untraced)} place(s) whose "
+                        "edges there are untraced: not merged"
+                    )
+                return {}
             # The evidence fits elsewhere as well: those places are hypotheses too, with the
             # same support, for the next moves to separate, or the ambiguity to record.
             for placement in rivals:
@@ -1341,7 +1353,18 @@ class Explorer:
     def _separating_port(self, node: int) -> int | None:
         return separating_port(self.map, Hypotheses(self.hyps.fragment, self._contenders()), node)
 
-    def _other_placements(self, h: Hypothesis) -> tuple[list[Placement], bool] | None:
+    def _untraced_rivals(self, h: Hypothesis) -> list[Placement]:
+        """With ``open_rivals``, the placements of ``h``'s fragment that fit the map only
+        with some of its edges between two untraced departures. A search that ran out of
+        steps found none it could rule out: ``h`` itself stands for them then."""
+        if not self.p.open_rivals:
+            return []
+        search = self._other_placements(h, open_edges=True)
+        return search[0] if search is not None else [h.mapping]
+
+    def _other_placements(
+        self, h: Hypothesis, open_edges: bool = False
+    ) -> tuple[list[Placement], bool] | None:
         """``other_placements`` of ``h``'s fragment, in the map as ``h``'s claims about old
         nodes (a lead-in: an old node is a copy of another) would make it: there the copies
         are one place, and a placement on a copy is no rival."""
@@ -1349,7 +1372,7 @@ class Explorer:
         old = {x: ck for x, ck in h.mapping.items() if x not in self.hyps.fragment}
         if not old:
             return other_placements(
-                view, h, self.p.tol, fits=self._heading_fits, open_edges=self.p.open_rivals
+                view, h, self.p.tol, fits=self._heading_fits, open_edges=open_edges
             )
         merged = self._merged_copy(old, view)
         if merged is None:
@@ -1366,7 +1389,7 @@ class Explorer:
             replace(h, mapping=mapping),
             self.p.tol,
             fits=self._heading_fits,
-            open_edges=self.p.open_rivals,
+            open_edges=open_edges,
         )
 
     def _fold_implied(self, tested: list[Hypothesis]) -> list[Hypothesis]:
