@@ -177,8 +177,13 @@ class ExplorerParams:
     # A hypothesis's crowd counts every old node that looks like the new one, even those whose
     # departure the robot came by is already explored (``Explorer._crowd``).
     crowd_all_ports: bool = True
-    # A rival placement of the fragment may join two unexplored departures of the map by one
-    # of its edges (placements.py, ``open_edges``).
+    # A proven hypothesis is not merged while its fragment also fits a place where some of
+    # its edges would join two untraced departures of the map (placements.py,
+    # ``open_edges``; ``Explorer._untraced_rivals``): fig15 at drift severe, seed 2, with
+    # cut_past on, merged a corner onto a rotated one mapped whole, the heading having drifted
+    # 75 degrees in 140 m of circling blocks, while the corner it was back at had two edges
+    # never traced. Such a place is no hypothesis of its own (it has no evidence to inherit):
+    # the proven one waits until it is gone.
     open_rivals: bool = True
     # Edges that went past a junction without homing there: a hypothesis whose prediction
     # failed on the edge's length alone, as such an edge explains, is kept; a new node may
