@@ -180,10 +180,11 @@ class ExplorerParams:
     # A proven hypothesis is not merged while its fragment also fits a place where some of
     # its edges would join two untraced departures of the map (placements.py,
     # ``open_edges``; ``Explorer._untraced_rivals``): fig15 at drift severe, seed 2, with
-    # cut_past on, merged a corner onto a rotated one mapped whole, the heading having drifted
-    # 75 degrees in 140 m of circling blocks, while the corner it was back at had two edges
-    # never traced. Such a place is no hypothesis of its own (it has no evidence to inherit):
-    # the proven one waits until it is gone.
+    # cut_past on, merged a corner onto a rotated one mapped whole (dead reckoning's heading
+    # had drifted 74 degrees over the 142 m between the two readings, so the rotation looked
+    # like 17), while the corner it was back at had two edges never traced. Such a place is
+    # no hypothesis of its own (it has no evidence to inherit): the proven one waits until
+    # it is gone.
     open_rivals: bool = True
     # Edges that went past a junction without homing there: a hypothesis whose prediction
     # failed on the edge's length alone, as such an edge explains, is kept; a new node may
