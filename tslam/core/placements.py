@@ -12,11 +12,12 @@ rather than guessed at.
 
 With ``open_edges`` a fragment edge may also fall between two old departures that are both
 unexplored: the map cannot say those two places are not joined so. In fig15 at drift
-``severe`` (seed 2) the corner the robot had come back to was mapped with two of its
-edges untraced, while a rotated corner was mapped with all four, and dead reckoning had
-turned by as much as the rotation: the fragment fit the rotated one alone, and was merged
-there. Such a placement still needs one edge of the map matched, or it says no more than
-that the nodes look alike (the hypothesis's crowd counts those).
+``severe`` (seed 2) the corner the robot had come back to was mapped with two of the
+fragment's four edges untraced, while a rotated corner was mapped with all four, and dead
+reckoning had turned by most of the rotation: the fragment fit the rotated one alone, and
+was merged there (with ``cut_past`` on). Such a placement still needs one edge of the map
+matched, or it says no more than that the nodes look alike (the hypothesis's crowd counts
+those). The explorer holds a merge for such a placement but tests no hypothesis of it.
 """
 
 from __future__ import annotations
