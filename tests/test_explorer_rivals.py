@@ -10,6 +10,10 @@ import math
 import pytest
 
 from hal.interfaces import NOMAD200_LIMITS
+from sim_backend.ground_truth import compute_gvg
+from sim_backend.world_files import load_world
+from tests.graph_walk import from_ground_truth, passed_once, walk
+from tests.test_explorer_graph import false_merges
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
 
@@ -51,3 +55,19 @@ def test_without_such_a_place_the_proven_hypothesis_merges(open_rivals, second_t
     ex, frag = _proven_chain(open_rivals, second_traced)
     renamed = ex._resolve(frag[-1])
     assert bool(renamed) is not second_traced
+
+
+def test_a_walk_of_fig15_with_a_junction_passed_makes_no_false_merge():
+    # The walk of tests/test_explorer_graph.py's mirror-image test, heading read, with the
+    # default settings. Made hypotheses with the proven one's evidence, such places had 2 false
+    # merges here; held for, none.
+    gvg = compute_gvg(load_world("fig15"))
+    graph = from_ground_truth(gvg)
+    start = next(n for n, v in graph.nodes.items() if v[0] == "meet")
+    ex = Explorer(NOMAD200_LIMITS)
+    walk(
+        graph, ex, start, max_arrivals=300, noise=0.03, seed=1, drift_deg_per_edge=0.5,
+        passed=passed_once(graph, "7"),
+        read_distance=True,
+    )  # fmt: skip
+    assert ex.merges and false_merges(ex) == 0
