@@ -1303,15 +1303,16 @@ class Explorer:
             rivals, own_fits = search
             if not rivals and own_fits:
                 untraced = [] if h.resumed else self._untraced_rivals(h)
-                if not untraced:
+                if untraced == []:
                     return self._merge(h)
                 # Not rivals to test: they inherit no evidence (their edges are untraced),
                 # and one merged when ``h`` fell would be a guess. ``h`` waits for them to go.
                 if id(h) not in self._held:
                     self._held.add(id(h))
+                    what = "too many places" if untraced is None else f"{len(untraced)} place(s)"
                     self._note(
-                        f"node {node}: the evidence also fits {len(untraced)} place(s) whose "
-                        "edges there are untraced: not merged"
+                        f"node {node}: the evidence also fits {what} whose edges there are "
+                        "untraced: not merged"
                     )
                 return {}
             # The evidence fits elsewhere as well: those places are hypotheses too, with the
@@ -1359,14 +1360,14 @@ class Explorer:
     def _separating_port(self, node: int) -> int | None:
         return separating_port(self.map, Hypotheses(self.hyps.fragment, self._contenders()), node)
 
-    def _untraced_rivals(self, h: Hypothesis) -> list[Placement]:
+    def _untraced_rivals(self, h: Hypothesis) -> list[Placement] | None:
         """With ``open_rivals``, the placements of ``h``'s fragment that fit the map only
-        with some of its edges between two untraced departures. A search that ran out of
-        steps found none it could rule out: ``h`` itself stands for them then."""
+        with some of its edges between two untraced departures; None if the search ran out
+        of steps (it ruled none out)."""
         if not self.p.open_rivals:
             return []
         search = self._other_placements(h, open_edges=True)
-        return search[0] if search is not None else [h.mapping]
+        return search[0] if search is not None else None
 
     def _other_placements(
         self, h: Hypothesis, open_edges: bool = False
