@@ -71,7 +71,7 @@ def placements(
     links = _links(tmap, nodes)
     order = _order(nodes, links)
     found: list[Placement] = []
-    search = _Search(tmap, order, links, set(nodes), tol, fits, open_edges, [budget])
+    search = _Search(tmap, order, links, set(nodes), tol, fits, open_edges, budget)
     try:
         for placement in search.place({}):
             if open_edges and not search.matches(placement):
@@ -131,7 +131,7 @@ class _Search:
     tol: Tolerances
     fits: PairFit | None
     open_edges: bool
-    budget: list[int]
+    budget: int  # steps left
 
     def place(self, done: Placement) -> Iterator[Placement]:
         if len(done) == len(self.order):
@@ -140,8 +140,8 @@ class _Search:
         x = self.order[len(done)]
         used = {c for c, _ in done.values()}
         for c, k in self._options(x, done):
-            self.budget[0] -= 1
-            if self.budget[0] < 0:
+            self.budget -= 1
+            if self.budget < 0:
                 raise _BudgetError
             if c in used or c in self.placed:
                 continue

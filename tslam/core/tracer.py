@@ -582,8 +582,8 @@ class Tracer:
             s.home_seen = now
             return None
         s.settle_tries = 0
-        at_estimate = centred or p.spread_at_estimate
-        if at_estimate and swept is not None and math.hypot(*swept) <= p.converge_tol_m:
+        converged = swept is not None and math.hypot(*swept) <= p.converge_tol_m
+        if converged and (centred or p.spread_at_estimate):
             at = laws.seen_from(obs, swept)
             order = sorted(range(len(obs)), key=lambda i: at[i])
             obs = [replace(obs[i], distance_m=at[i]) for i in order]
@@ -608,9 +608,7 @@ class Tracer:
             if a is not None:
                 s.tangent = (a[2], a[3])
             return None
-        point = None
-        if p.length_at_estimate and math.hypot(*swept) <= p.converge_tol_m:
-            point = _add(_to_odom(swept, odo), odo)
+        point = _add(_to_odom(swept, odo), odo) if converged and p.length_at_estimate else None
         self._meet(obs, odo, now, events, point)
         return None
 
