@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from tslam.core import laws
 from tslam.core.place import place_obstacles
 from tslam.core.sensing import Obstacle
@@ -68,6 +70,18 @@ def test_an_obstacle_behind_a_nearer_one_makes_no_meet_point():
     obs = [west, north, south, behind]
     place = place_obstacles(obs, _near(obs), radius_m=0.4, tol_m=0.05)
     assert len(place) == 3 and all(o is not behind for o in place)
+
+
+@pytest.mark.parametrize("corners", [True, False])
+def test_a_meet_point_between_two_corners_and_a_wall_is_sought_as_three_corners(corners):
+    # fig16's corridor meet point: the far wall 1.14 m east, the indent's corners 1.14 m off
+    # to the north-west and south-west, its back wall 1.26 m west. The weak meet point lies
+    # 0.36 m west, equidistant to the corners and the back wall; as three walls, 0.53 m west.
+    east, back = _corner(1.14, 0.0), _corner(-1.26, 0.0)
+    north, south = _corner(-0.859, 0.75), _corner(-0.859, -0.75)
+    obs = sorted([east, back, north, south], key=lambda o: o.distance_m)
+    place = place_obstacles(obs, _near(obs), radius_m=0.4, tol_m=0.05, corners=corners)
+    assert (len(place), any(o is back for o in place)) == ((4, True) if corners else (3, False))
 
 
 def test_radius_zero_reads_the_point_alone():

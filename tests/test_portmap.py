@@ -38,6 +38,15 @@ def test_a_three_way_reading_of_a_four_way_node_matches_by_angle_from_the_arriva
     assert pm.index[2] == pm.index[3] == 2
 
 
+def test_a_pair_read_as_one_edge_may_be_the_arrival_edge():
+    ports = [R(a) for a in (90, 160, 200, 270)]  # arrived by port 2, from a dead end
+    seen = [R(a) for a in (90, 180, 270)]  # the 160 and 200 ports read as one edge, at 180
+    pm = match_by_angle(seen, 1, ports, 2, R(25))
+    assert pm is not None and pm.arrival == 2
+    # Port 1 leads along the arrival edge, not off along the corridor at 90 or 270.
+    assert pm.index == (0, 1, 1, 2)
+
+
 def test_readings_that_agree_on_nothing_but_the_arrival_do_not_match():
     ports = [R(a) for a in (0, 70, 180, 290)]
     seen = [R(a) for a in (0, 120, 240)]

@@ -325,3 +325,42 @@ def test_the_readings_of_a_true_bent_wall_stay_within_its_vertex():
     d[(deg > 350) | (deg < 10)] = 1.52  # the vertex of faces 1.40 and 1.42 m off: 1.50 m
     d[(deg >= 10) & (deg <= 30)] = 1.42
     assert len(sweep_minima(b, d, vertex=True)) == 1
+
+
+def _near_bearings(obs, within_m: float = 1.3) -> list[float]:
+    return _bearings([o for o in obs if o.distance_m <= within_m])
+
+
+@pytest.mark.parametrize("step_deg", [2.8, 5.6])
+def test_a_recess_back_wall_is_not_one_bent_wall_with_its_corners(step_deg):
+    b, d = _indent_from_the_corridor(step_deg)
+    # Chained corner to back wall to corner, the indent read as one obstacle.
+    assert len(_near_bearings(sweep_minima(b, d))) == 2
+    obs = sweep_minima(b, d, recess=True)
+    assert len(_near_bearings(obs)) == 4
+    (back,) = [o for o in obs if 1.2 < o.distance_m < 1.3]
+    assert math.degrees(back.bearing_rad) % 360 == pytest.approx(232.0, abs=3.0)
+
+
+@pytest.mark.parametrize("step_deg", [2.8, 5.6])
+def test_a_recess_back_wall_whose_side_lobes_reach_a_corner_is_still_an_obstacle(step_deg):
+    b, d = _indent_from_the_corridor(step_deg)
+    deg = np.degrees(b)
+    # Side lobes carry the back wall's echo right up to the near corner's plateau: its run
+    # borders a lower one, a slope by Fig. 4's rule.
+    d[(deg > 196) & (deg < 212)] = 1.25
+    assert len(_near_bearings(sweep_minima(b, d))) == 3
+    assert len(_near_bearings(sweep_minima(b, d, recess=True))) == 4
+
+
+def test_a_plateau_beside_a_nearer_wall_on_one_side_only_is_a_slope_still():
+    # A wall's end: the wall 1.0 m off, its end's corner echo 1.3 m off just past it, and
+    # nothing nearer beyond. Not framed by two nearer obstacles: no recess.
+    b = _ring()
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 60) & (deg <= 120)] = 1.0
+    d[(deg > 120) & (deg <= 145)] = 1.3
+    (wall,) = sweep_minima(b, d, recess=True)
+    assert wall.distance_m == 1.0
+    assert _bearings(sweep_minima(b, d)) == _bearings([wall])

@@ -125,6 +125,15 @@ class ExplorerParams:
     # Homed again this close after leaving a meet point, and read with another number of
     # edges: the two points are one place (``Explorer._reread``, ``_read_place``).
     place_hop_m: float = 0.45
+    # Homed within ``place_hop_m`` at the place's other point, read with another degree, where
+    # the departure being left by leaves too: go on by it (False: a departure not held).
+    on_through_place: bool = True
+    # ... and read with the same degree, further than ``bounce_m`` off: the place read from
+    # its other point, the same node, its ports matched by bearing (False: a new node).
+    place_hop_same: bool = True
+    # A node read at two points of its place: an edge to it is matched with that much more
+    # length slack, as the robot may home at either end (False: the edge's own tolerance).
+    place_span_slack: bool = True
     # An edge whose length is a walk's remainder is matched with this much more slack, until
     # a traversal measures it: fig12 seed 10 mapped a dead end at 1.17 m so and, back along
     # it, homed at its junction after 1.55 m, 4 cm beyond the tolerance, and went lost.
@@ -262,6 +271,9 @@ class Explorer:
         self._detour_from: tuple[float, float, float, bool, bool] | None = None
         self.partial_m = 0.0  # length before a weak meet point passed through
         self._through: int | None = None  # ... and the departure that goes on through it
+        # The departure being left by, when the robot homed on the way at its place's other
+        # point: it leaves from there too, and the robot goes on by it (``_reread``).
+        self._on_by: tuple[int, int] | None = None
         self.plan: list[Step] = []
         self.frozen: set[tuple[int, int]] = set()
         self.done = False
@@ -272,6 +284,8 @@ class Explorer:
         self.verified: set[int] = set()  # edges gone back along once the map had no frontier
         self.notes: list[Note] = []
         self.bounces: dict[tuple[int, int], int] = {}
+        # Meet node -> how far apart two of its place's points were read (``_spans``).
+        self.span: dict[int, float] = {}
         self._last_visit: tuple[int, tuple[float, ...], PortMap, float, float] | None = None
         self._now = 0.0
         self._odo: Odometry | None = None
@@ -506,14 +520,24 @@ class Explorer:
         if node != self.leaving[0] or not self.map.has_node(node):
             return None
         moved = math.hypot(ev.x_m - x, ev.y_m - y)
+        if (
+            self.p.place_hop_same
+            and ev.degree == len(deps)
+            and p.bounce_m < moved
+            and max(length, moved) <= p.place_hop_m
+        ):
+            # The place's other point, read as the place again (fig16's weak meet point
+            # 0.36 m into the indent, read with the place's four edges as the corridor's
+            # meet point was): one node, its ports matched by absolute bearing.
+            return self._spans(node, moved, self._reread(ev, node, deps, pm))
         if ev.degree != len(deps):
             if max(length, moved) > p.place_hop_m:
                 return None
             if ev.degree > len(deps) and ev.degree >= self.map.node(node).degree:
                 placed = self._read_place(ev, node)
                 if placed is not None:
-                    return placed
-            return self._reread(ev, node, deps, pm)
+                    return self._spans(node, moved, placed)
+            return self._spans(node, moved, self._reread(ev, node, deps, pm))
         if (far and length > p.bounce_far_m) or moved > reach:
             return None
 
@@ -538,6 +562,15 @@ class Explorer:
         self._note(f"back at node {node}: departure {key[1]} could not be held")
         return node, PortMap(pm.index, arrival)
 
+    def _spans(
+        self, node: int, moved: float, found: tuple[int, PortMap] | None
+    ) -> tuple[int, PortMap] | None:
+        """``found`` as it is; if it is ``node``, read again ``moved`` off, the place spans
+        that much: an edge to it may end at either of its points (``_expected``)."""
+        if found is not None and found[0] == node and self.p.place_span_slack:
+            self.span[node] = max(self.span.get(node, 0.0), moved)
+        return found
+
     def _reread(
         self, ev: MeetPointReached, node: int, deps: tuple[float, ...], pm: PortMap
     ) -> tuple[int, PortMap] | None:
@@ -558,6 +591,13 @@ class Explorer:
         key = self.leaving
         assert key is not None
         arrival = next((q for q, i in enumerate(index) if i == ev.arrival_index), None)
+        if self.p.on_through_place and index[key[1]] != ev.arrival_index:
+            # The departure leaves from here too, not by the way the robot came in: it homed
+            # at the place's other point on the way (fig16's weak meet point, 0.36 m into
+            # the indent from the corridor's), and no departure was lost.
+            self._on_by = key
+            self._note(f"at node {node}'s other point, read with {ev.degree} edges: on by {key[1]}")
+            return node, PortMap(tuple(index), arrival)
         self._count_bounce(key)
         self._note(f"back at node {node}, read with {ev.degree} edges: departure {key[1]} not held")
         return node, PortMap(tuple(index), arrival)
@@ -597,9 +637,11 @@ class Explorer:
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, e: int, length: float | None
     ) -> tuple[int, int | PortMap]:
         slack = self.p.estimate_slack_m if e in self.estimated else 0.0
-        tol = self._tol(slack)
         edge = self.map.edge(e)
         w, q = edge.other_end(f, j)
+        # A place read at both its points: the edge ends at one or the other.
+        slack += self.span.get(f, 0.0) + self.span.get(w, 0.0)
+        tol = self._tol(slack)
         a = ev.arrival_index
         assert a is not None
         k = self._match(ev, seen, a, w, q, length, edge.length_m, slack)
@@ -629,7 +671,7 @@ class Explorer:
                 self.estimated.discard(e)
             self.partial_m = 0.0
             return w, k
-        pm = self._read_otherwise(ev, w, q, length, edge.length_m)
+        pm = self._read_otherwise(ev, w, q, length, edge.length_m, slack)
         if pm is not None:
             if length is not None and not self.disturbed:
                 self.map.add_measurement(e, length)
@@ -902,7 +944,13 @@ class Explorer:
         return fits[0][1]
 
     def _read_otherwise(
-        self, ev: MeetPointReached, w: int, q: int, length: float | None, mapped: float
+        self,
+        ev: MeetPointReached,
+        w: int,
+        q: int,
+        length: float | None,
+        mapped: float,
+        slack_m: float = 0.0,
     ) -> PortMap | None:
         """The port map if the meet point at the end of a known edge is its node read with
         one edge more or fewer (section VII-B's close meet points, a weak meet point): the
@@ -910,7 +958,7 @@ class Explorer:
         but the edge that differs, and so does the clearance, as far as two points of one
         place can differ: fig16's two are 0.91 m and 1.14 m clear, and its place, read at the
         weak one, was not recognised at the corridor's one."""
-        tol, wn = self._tol(), self.map.node(w)
+        tol, wn = self._tol(slack_m), self.map.node(w)
         if (
             ev.arrival_index is None
             or self.partial_m > 0
@@ -1638,6 +1686,9 @@ class Explorer:
         self.plan = []
 
     def _next_port(self, node: int, arrival: int | None) -> int | None:
+        on_by, self._on_by = self._on_by, None
+        if on_by is not None and on_by[0] == node:
+            return on_by[1]
         if self.hyps and node in self.hyps.fragment:
             p = self._separating_port(node)
             if p is not None:

@@ -67,9 +67,11 @@ def match_by_angle(
             index.append(arrival_index)
             continue
         rel = (ports_rad[p] - ports_rad[arrival_port]) % TAU
-        i = min(
-            (i for i in range(ns) if i != arrival_index), key=lambda i: _angdiff(rel_seen[i], rel)
-        )
+        # Read with one edge fewer, the pair seen as one may be the arrival's: a port beside
+        # the arrival port then leads along the arrival departure too (fig16's indent,
+        # arrived at from one of its two dead ends with the pair read as one edge).
+        others = (i for i in range(ns) if ns < nm or i != arrival_index)
+        i = min(others, key=lambda i: _angdiff(rel_seen[i], rel))
         index.append(i)
         agree += _angdiff(rel_seen[i], rel) <= angle_tol_rad
     if agree < max(1, min(ns, nm) - 2):

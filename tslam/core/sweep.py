@@ -54,6 +54,13 @@ MIN_VIEW_RAD = math.radians(5.0)
 #: a concave bend of about 55 degrees between normals gives (1 / cos 27.5).
 BENT_WALL_MAX_RAD = math.radians(90.0)
 SHALLOW_BEND_RATIO = 1.12
+#: A wall set back between two nearer obstacles (a recess: fig16's indent seen from the
+#: corridor) answers over its normal's whole span, but its side lobes reach the nearer
+#: obstacles' plateaus, so its run borders a lower one and reads as a slope. A plateau this
+#: wide is no slope (a slope rises across it), and with a nearer, separate obstacle close
+#: beyond each end it is the recess's back wall.
+RECESS_MIN_RAD = math.radians(15.0)
+RECESS_FRAME_RAD = math.radians(35.0)
 
 
 class Sweep:
@@ -100,6 +107,7 @@ class Sweep:
         silent: bool = False,
         shallow: bool = False,
         vertex: bool = False,
+        recess: bool = False,
     ) -> list[Obstacle]:
         """The obstacles seen, in the frame of a robot heading ``heading_rad``; the options
         as for ``sweep_minima``."""
@@ -113,6 +121,7 @@ class Sweep:
             silent=silent,
             shallow=shallow,
             vertex=vertex,
+            recess=recess,
         )
 
 
@@ -130,6 +139,7 @@ def sweep_minima(
     silent: bool = False,
     shallow: bool = False,
     vertex: bool = False,
+    recess: bool = False,
 ) -> list[Obstacle]:
     """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
 
@@ -148,7 +158,8 @@ def sweep_minima(
     doorway. With ``shallow`` two runs up to 90 degrees apart are one wall if the readings
     between them show a shallow bend's vertex (``_shallow_bend``). With ``vertex`` two runs
     are not one bent wall if a reading between them lies beyond the vertex their two faces
-    would make (``_bend_vertex``).
+    would make (``_bend_vertex``). With ``recess`` a plateau that borders a lower run is
+    still an obstacle if it is wide and framed by two nearer obstacles (``_recessed``).
     """
     n = len(bearing_rad)
     if n < 3:
@@ -162,6 +173,7 @@ def sweep_minima(
     fewest = max(min_samples, math.ceil(min_run_rad * n / (2 * math.pi)))
     runs: list[tuple[float, float, int, int]] = []  # distance, mid bearing, lo, hi
     short: list[tuple[int, float]] = []  # runs too short to count: seed reading, limit
+    counted: list[int] = []  # the run ids in ``runs``
     for run_id, i in enumerate(np.argsort(d, kind="stable")):
         if not math.isfinite(d[i]):
             break
@@ -181,6 +193,8 @@ def sweep_minima(
                 short.append((int(i), limit))
             continue
         runs.append(_run(b, d, idx, member, lo, hi))
+        counted.append(run_id)
+    sloped = _sloped(b, d, claimed, counted, tol_m, tol_rel, fewest) if recess else []
     if silent and not bridge and short:
         # A run too short to count may be a wall that dropouts cut into pieces (no echo
         # between readings on one plateau). Only such pieces are joined, after every run
@@ -201,8 +215,15 @@ def sweep_minima(
     if not runs:
         return []
     # Neighbouring runs on one bent wall join, in chains (a side-lobe fragment, the wall,
-    # the next face of the bend); the nearest run of a chain stands for it.
+    # the next face of the bend); the nearest run of a chain stands for it. A recess's back
+    # wall joins neither neighbour: fig16's indent read as one wall round its two corners.
     runs.sort(key=lambda r: r[1])
+    if recess:
+        flagged = [r for r in runs + sloped if _recessed(r, runs, b, tol_m)]
+        runs = sorted(set(runs) | set(flagged), key=lambda r: r[1])
+        set_back = [r in flagged for r in runs]
+    else:
+        set_back = [False] * len(runs)
     m = len(runs)
     parent = list(range(m))
 
@@ -213,6 +234,8 @@ def sweep_minima(
 
     # Every neighbouring pair, counter-clockwise: with two runs that is both arcs between them.
     for k in range(m if m > 1 else 0):
+        if set_back[k] or set_back[(k + 1) % m]:
+            continue
         a, c = runs[k], runs[(k + 1) % m]
         one = _one_wall(a, c, d, merge_rad, bend_ratio, shallow, vertex)
         if one is not False:
@@ -224,11 +247,67 @@ def sweep_minima(
         r = root(k)
         if r not in best or run[0] < best[r][0]:
             best[r] = run
+    kept = list(best.values())
     out = []
-    for dist, mid, _, _ in sorted(best.values()):
+    for dist, mid, _, _ in sorted(kept):
         ux, uy = math.cos(mid), math.sin(mid)
         out.append(Obstacle(dist, ux * dist, uy * dist, -ux, -uy, math.atan2(uy, ux)))
     return out
+
+
+def _sloped(
+    b: np.ndarray,
+    d: np.ndarray,
+    claimed: np.ndarray,
+    counted: list[int],
+    tol_m: float,
+    tol_rel: float,
+    fewest: int,
+) -> list[tuple[float, float, int, int]]:
+    """The plateaus among the readings no counted run holds that border a lower run, joined
+    over readings with no echo: a recess's back wall answers by specular reflection and
+    side lobes, half of which drop out (fig16's indent, seed 1: three pieces over 35
+    degrees, none long enough to count)."""
+    n = len(d)
+    open_ = np.where(np.isin(claimed, counted), claimed, -1)
+    out = []
+    for i in np.argsort(d, kind="stable"):
+        if not math.isfinite(d[i]):
+            break
+        if open_[i] >= 0:
+            continue
+        limit = d[i] + tol_m + tol_rel * d[i]
+        lo, hi, slope = _grow(d, open_, int(i), limit, False, True)
+        idx = np.array([k % n for k in range(lo, hi + 1)])
+        member = idx[d[idx] <= limit]
+        open_[idx] = n + i
+        if slope and len(idx) < n and len(member) >= fewest:
+            out.append(_run(b, d, idx, member, lo, hi))
+    return out
+
+
+def _recessed(
+    run: tuple[float, float, int, int],
+    runs: list[tuple[float, float, int, int]],
+    b: np.ndarray,
+    step_m: float,
+) -> bool:
+    """Whether ``run`` is a recess's back wall: at least ``RECESS_MIN_RAD`` wide, and the
+    runs of ``runs`` (in bearing order) on either side of it each at least ``step_m``
+    nearer, within ``RECESS_FRAME_RAD`` beyond its end."""
+    two_pi = 2 * math.pi
+    dist, mid, lo, hi = run
+    others = [r for r in runs if r != run]
+    if len(others) < 2 or (b[hi] - b[lo]) % two_pi < RECESS_MIN_RAD:
+        return False
+    after = min(others, key=lambda r: (r[1] - mid) % two_pi)
+    before = max(others, key=lambda r: (r[1] - mid) % two_pi)
+    return (
+        before[0] <= dist - step_m
+        and after[0] <= dist - step_m
+        and (b[lo] - b[before[3]]) % two_pi <= RECESS_FRAME_RAD
+        and (b[after[2]] - b[hi]) % two_pi <= RECESS_FRAME_RAD
+    )
 
 
 def _run(
