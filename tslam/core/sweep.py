@@ -56,9 +56,10 @@ BENT_WALL_MAX_RAD = math.radians(90.0)
 SHALLOW_BEND_RATIO = 1.12
 #: A wall set back between two nearer obstacles (a recess: fig16's indent seen from the
 #: corridor) answers over its normal's whole span, but its side lobes reach the nearer
-#: obstacles' plateaus, so its run borders a lower one and reads as a slope. A plateau this
-#: wide is no slope (a slope rises across it), and with a nearer, separate obstacle close
-#: beyond each end it is the recess's back wall.
+#: obstacles' plateaus, so its run borders a lower one and reads as a slope; or its run
+#: counts and chains to them as one bent wall. A plateau ``RECESS_MIN_RAD`` wide is no
+#: slope (a slope rises across it), and with a nearer run within ``RECESS_FRAME_RAD`` beyond
+#: each end it is the recess's back wall.
 RECESS_MIN_RAD = math.radians(15.0)
 RECESS_FRAME_RAD = math.radians(35.0)
 
@@ -181,8 +182,7 @@ def sweep_minima(
             continue
         limit = d[i] + tol_m + tol_rel * d[i]
         lo, hi, slope = _grow(d, claimed, int(i), limit, bridge, False)
-        idx = np.array([k % n for k in range(lo, hi + 1)])
-        member = idx[d[idx] <= limit]
+        idx, member = _span(d, lo, hi, limit)
         claimed[idx] = run_id
         if slope or len(idx) == n or len(member) < fewest:
             # A real wall or corner answers over the whole beam: several samples of a sweep,
@@ -207,8 +207,7 @@ def sweep_minima(
             if open_[i] >= 0:
                 continue
             lo, hi, slope = _grow(d, open_, i, limit, False, True)
-            idx = np.array([k % n for k in range(lo, hi + 1)])
-            member = idx[d[idx] <= limit]
+            idx, member = _span(d, lo, hi, limit)
             open_[idx] = n + i
             if not slope and len(idx) < n and len(member) >= fewest:
                 runs.append(_run(b, d, idx, member, lo, hi))
@@ -247,9 +246,8 @@ def sweep_minima(
         r = root(k)
         if r not in best or run[0] < best[r][0]:
             best[r] = run
-    kept = list(best.values())
     out = []
-    for dist, mid, _, _ in sorted(kept):
+    for dist, mid, _, _ in sorted(best.values()):
         ux, uy = math.cos(mid), math.sin(mid)
         out.append(Obstacle(dist, ux * dist, uy * dist, -ux, -uy, math.atan2(uy, ux)))
     return out
@@ -278,8 +276,7 @@ def _sloped(
             continue
         limit = d[i] + tol_m + tol_rel * d[i]
         lo, hi, slope = _grow(d, open_, int(i), limit, False, True)
-        idx = np.array([k % n for k in range(lo, hi + 1)])
-        member = idx[d[idx] <= limit]
+        idx, member = _span(d, lo, hi, limit)
         open_[idx] = n + i
         if slope and len(idx) < n and len(member) >= fewest:
             out.append(_run(b, d, idx, member, lo, hi))
@@ -308,6 +305,13 @@ def _recessed(
         and (b[lo] - b[before[3]]) % two_pi <= RECESS_FRAME_RAD
         and (b[after[2]] - b[hi]) % two_pi <= RECESS_FRAME_RAD
     )
+
+
+def _span(d: np.ndarray, lo: int, hi: int, limit: float) -> tuple[np.ndarray, np.ndarray]:
+    """The indices of readings ``lo`` to ``hi`` (unwrapped), and those of them within
+    ``limit``: a run's readings and its plateau."""
+    idx = np.array([k % len(d) for k in range(lo, hi + 1)])
+    return idx, idx[d[idx] <= limit]
 
 
 def _run(
