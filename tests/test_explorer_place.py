@@ -82,3 +82,27 @@ def test_back_from_a_dead_end_at_the_places_other_point_is_the_node(slack):
         assert ex.here == node and not lost
     else:
         assert lost and ex.here != node
+
+
+def test_a_departure_gone_on_by_twice_is_not_held_the_third_time():
+    # Sent back and forth between the two points, the robot is not getting out of the place.
+    ex, node, ports = at_the_place()
+    corridor = ex._last_visit
+    for i in range(3):
+        ex._last_visit = corridor
+        ex._leave(node, ports[160])
+        ex._odo = Odometry(-0.36, 0.0, 0.0, 0.0, 0.36 * (i + 1), 0.36)
+        ex._choose(meet(-0.36, 0.0, [0, 152, 208], 0, 0.36))
+    on_by = [n.text for n in ex.notes if n.text.endswith(f"on by {ports[160]}")]
+    assert len(on_by) == 2
+    assert ex.notes[-1].text.endswith(f"departure {ports[160]} not held")
+    assert ex.bounces == {(node, ports[160]): 1}
+
+
+def test_read_with_another_degree_where_it_stood_is_a_bounce_not_the_other_point():
+    # 6 cm on, not 0.36 m: the same point, the departure not held (fig13 seed 1).
+    ex, node, ports = at_the_place()
+    ex._odo = Odometry(-0.06, 0.0, 0.0, 0.0, 0.06, 0.06)
+    ex._choose(meet(-0.06, 0.0, [0, 152, 208], 0, 0.06))
+    assert ex.notes[-1].text.endswith(f"departure {ports[160]} not held")
+    assert ex.bounces == {(node, ports[160]): 1}

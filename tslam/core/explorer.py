@@ -274,6 +274,7 @@ class Explorer:
         # The departure being left by, when the robot homed on the way at its place's other
         # point: it leaves from there too, and the robot goes on by it (``_reread``).
         self._on_by: tuple[int, int] | None = None
+        self._on_by_count: dict[tuple[int, int], int] = {}  # ... how often, by departure
         self.plan: list[Step] = []
         self.frozen: set[tuple[int, int]] = set()
         self.done = False
@@ -529,7 +530,7 @@ class Explorer:
             # The place's other point, read as the place again (fig16's weak meet point
             # 0.36 m into the indent, read with the place's four edges as the corridor's
             # meet point was): one node, its ports matched by absolute bearing.
-            return self._spans(node, moved, self._reread(ev, node, deps, pm))
+            return self._spans(node, moved, self._reread(ev, node, deps, pm, moved))
         if ev.degree != len(deps):
             if max(length, moved) > p.place_hop_m:
                 return None
@@ -537,7 +538,7 @@ class Explorer:
                 placed = self._read_place(ev, node)
                 if placed is not None:
                     return self._spans(node, moved, placed)
-            return self._spans(node, moved, self._reread(ev, node, deps, pm))
+            return self._spans(node, moved, self._reread(ev, node, deps, pm, moved))
         if (far and length > p.bounce_far_m) or moved > reach:
             return None
 
@@ -572,7 +573,12 @@ class Explorer:
         return found
 
     def _reread(
-        self, ev: MeetPointReached, node: int, deps: tuple[float, ...], pm: PortMap
+        self,
+        ev: MeetPointReached,
+        node: int,
+        deps: tuple[float, ...],
+        pm: PortMap,
+        moved: float = 0.0,
     ) -> tuple[int, PortMap] | None:
         """The junction just left, read again within ``place_hop_m`` with another number of
         edges: the robot homed again, onto one point of a close pair it had read as their
@@ -591,11 +597,14 @@ class Explorer:
         key = self.leaving
         assert key is not None
         arrival = next((q for q, i in enumerate(index) if i == ev.arrival_index), None)
-        if self.p.on_through_place and index[key[1]] != ev.arrival_index:
+        on = self.p.on_through_place and moved > self.p.bounce_m
+        if on and index[key[1]] != ev.arrival_index and self._on_by_count.get(key, 0) < 2:
             # The departure leaves from here too, not by the way the robot came in: it homed
             # at the place's other point on the way (fig16's weak meet point, 0.36 m into
-            # the indent from the corridor's), and no departure was lost.
+            # the indent from the corridor's), and no departure was lost. Twice at most for
+            # a departure: a robot sent back and forth between the two points is bouncing.
             self._on_by = key
+            self._on_by_count[key] = self._on_by_count.get(key, 0) + 1
             self._note(f"at node {node}'s other point, read with {ev.degree} edges: on by {key[1]}")
             return node, PortMap(tuple(index), arrival)
         self._count_bounce(key)
