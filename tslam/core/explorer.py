@@ -586,7 +586,9 @@ class Explorer:
         make the node the place) (fig13 seed 1: its 0.29 m pair read with four edges, then
         6 cm on with three, and mapped twice). The robot stands at the node; its ports are
         matched to the departures by their absolute bearings, which a few seconds do not
-        turn."""
+        turn. Also read so with the same degree (``place_hop_same``). ``moved``: how far
+        from where it was read last; further than ``bounce_m``, the robot is at the place's
+        other point, and may go on by the departure it was leaving by."""
         now = ev.departures_rad
         ports = [deps[i] for i in pm.index]
         index = [_nearest(b, now) for b in ports]
