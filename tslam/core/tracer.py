@@ -132,9 +132,9 @@ class TracerParams:
     # (sweep.py), and a place's meet points are sought as three corners' too (place.py). At
     # fig16's indent the corridor's meet point then finds the weak meet point 0.36 m off in
     # its place, and the indent's second edge, which the ring never shows on the move. But
-    # the sweep reads the recess from there in about 3 sweeps of 5 (side lobes and dropouts
-    # cut its back wall, or chain it to the corners as one bent wall), and a place read
-    # with 3 edges on one visit and 4 on the next is mapped twice: off (README, stop 33).
+    # not on every arrival (dropouts cut a corner or the wall too short to count), a place
+    # read with 3 edges on one visit and 4 on the next is hard to keep as one node, and the
+    # benches complete fewer runs: off (README, stop 33).
     sweep_recess: bool = False
     place_corners: bool = False
     sensing: SensingParams = field(default_factory=SensingParams)
