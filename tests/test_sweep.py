@@ -364,3 +364,20 @@ def test_a_plateau_beside_a_nearer_wall_on_one_side_only_is_a_slope_still():
     (wall,) = sweep_minima(b, d, recess=True)
     assert wall.distance_m == 1.0
     assert _bearings(sweep_minima(b, d)) == _bearings([wall])
+
+
+def test_the_middle_face_of_a_concave_bend_is_no_recess():
+    # fig12's cut corner (seed 1, 341 s): two faces 1.41 m and 1.44 m off, the cut between
+    # them 1.46-1.55 m, a little deeper, and no view past them between: a bent wall, not a
+    # recess's back wall with a meet point before it.
+    b = _ring(5.6)
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 95) & (deg <= 135)] = 1.41
+    d[(deg > 135) & (deg < 165)] = 1.55
+    d[(deg >= 165) & (deg <= 200)] = 1.44
+    assert _bearings(sweep_minima(b, d, recess=True)) == _bearings(sweep_minima(b, d))
+    assert len(sweep_minima(b, d)) == 2
+    # A view past the cut on one side, into an inner corner behind it: a recess.
+    d[(deg > 135) & (deg <= 142)] = 1.70
+    assert len(sweep_minima(b, d, recess=True)) == 3

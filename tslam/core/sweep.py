@@ -218,7 +218,7 @@ def sweep_minima(
     # wall joins neither neighbour: fig16's indent read as one wall round its two corners.
     runs.sort(key=lambda r: r[1])
     if recess:
-        flagged = [r for r in runs + sloped if _recessed(r, runs, b, tol_m)]
+        flagged = [r for r in runs + sloped if _recessed(r, runs, b, d, tol_m)]
         runs = sorted(set(runs) | set(flagged), key=lambda r: r[1])
         set_back = [r in flagged for r in runs]
     else:
@@ -287,24 +287,34 @@ def _recessed(
     run: tuple[float, float, int, int],
     runs: list[tuple[float, float, int, int]],
     b: np.ndarray,
+    d: np.ndarray,
     step_m: float,
 ) -> bool:
-    """Whether ``run`` is a recess's back wall: at least ``RECESS_MIN_RAD`` wide, and the
-    runs of ``runs`` (in bearing order) on either side of it each at least ``step_m``
-    nearer, within ``RECESS_FRAME_RAD`` beyond its end."""
-    two_pi = 2 * math.pi
+    """Whether ``run`` is a recess's back wall: at least ``RECESS_MIN_RAD`` wide, the runs of
+    ``runs`` (in bearing order) on either side of it each at least ``step_m`` nearer, within
+    ``RECESS_FRAME_RAD`` beyond its end, and a view deeper than it between it and one of
+    them: the recess's inner corner. Without one it is the middle face of a concave bend,
+    joined to both (fig12's cut corner, seed 1: faces 1.41 m and 1.44 m off, the middle
+    1.53 m, read as a meet point of degree 4 mid-room)."""
+    two_pi, n = 2 * math.pi, len(d)
     dist, mid, lo, hi = run
     others = [r for r in runs if r != run]
     if len(others) < 2 or (b[hi] - b[lo]) % two_pi < RECESS_MIN_RAD:
         return False
     after = min(others, key=lambda r: (r[1] - mid) % two_pi)
     before = max(others, key=lambda r: (r[1] - mid) % two_pi)
-    return (
+    if not (
         before[0] <= dist - step_m
         and after[0] <= dist - step_m
         and (b[lo] - b[before[3]]) % two_pi <= RECESS_FRAME_RAD
         and (b[after[2]] - b[hi]) % two_pi <= RECESS_FRAME_RAD
-    )
+    ):
+        return False
+    gaps = [range(before[3] + 1, before[3] + 1 + (lo - before[3] - 1) % n)]
+    gaps.append(range(hi + 1, hi + 1 + (after[2] - hi - 1) % n))
+    between = np.array([d[k % n] for gap in gaps for k in gap])
+    seen = between[np.isfinite(between)]
+    return bool(np.any(seen > dist + step_m))
 
 
 def _span(d: np.ndarray, lo: int, hi: int, limit: float) -> tuple[np.ndarray, np.ndarray]:
