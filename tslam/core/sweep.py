@@ -203,14 +203,7 @@ def sweep_minima(
         # walls 62 degrees apart.
         free = np.isin(claimed, [-1] + [int(claimed[i]) for i, _ in short])
         open_ = np.where(free, -1, claimed)
-        for i, limit in short:
-            if open_[i] >= 0:
-                continue
-            lo, hi, slope = _grow(d, open_, i, limit, False, True)
-            idx, member = _span(d, lo, hi, limit)
-            open_[idx] = n + i
-            if not slope and len(idx) < n and len(member) >= fewest:
-                runs.append(_run(b, d, idx, member, lo, hi))
+        runs += [r for r, slope in _joined(b, d, open_, short, fewest) if not slope]
     if not runs:
         return []
     # Neighbouring runs on one bent wall join, in chains (a side-lobe fragment, the wall,
@@ -266,20 +259,32 @@ def _sloped(
     over readings with no echo: a recess's back wall answers by specular reflection and
     side lobes, half of which drop out (fig16's indent, seed 1: three pieces over 35
     degrees, none long enough to count)."""
-    n = len(d)
     open_ = np.where(np.isin(claimed, counted), claimed, -1)
+    seeds = [(int(i), d[i] + tol_m + tol_rel * d[i]) for i in np.argsort(d, kind="stable")]
+    seeds = [(i, limit) for i, limit in seeds if math.isfinite(limit)]
+    return [r for r, slope in _joined(b, d, open_, seeds, fewest) if slope]
+
+
+def _joined(
+    b: np.ndarray,
+    d: np.ndarray,
+    open_: np.ndarray,
+    seeds: list[tuple[int, float]],
+    fewest: int,
+) -> list[tuple[tuple[float, float, int, int], bool]]:
+    """Runs grown from each seed (reading, limit) not yet held in ``open_``, joined over
+    readings with no echo, each with whether it borders a lower run; only those of at least
+    ``fewest`` readings on their plateau, short of the whole circle. ``open_`` records them."""
+    n = len(d)
     out = []
-    for i in np.argsort(d, kind="stable"):
-        if not math.isfinite(d[i]):
-            break
+    for i, limit in seeds:
         if open_[i] >= 0:
             continue
-        limit = d[i] + tol_m + tol_rel * d[i]
-        lo, hi, slope = _grow(d, open_, int(i), limit, False, True)
+        lo, hi, slope = _grow(d, open_, i, limit, False, True)
         idx, member = _span(d, lo, hi, limit)
         open_[idx] = n + i
-        if slope and len(idx) < n and len(member) >= fewest:
-            out.append(_run(b, d, idx, member, lo, hi))
+        if len(idx) < n and len(member) >= fewest:
+            out.append((_run(b, d, idx, member, lo, hi), slope))
     return out
 
 
