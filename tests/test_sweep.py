@@ -118,15 +118,19 @@ def _fine_ring() -> np.ndarray:
 
 
 def test_a_fast_rings_side_lobe_streaks_are_not_obstacles():
-    b = _fine_ring()
-    deg = np.degrees(b)
-    d = np.full(len(b), np.inf)
-    d[(deg >= 80) & (deg <= 110)] = 1.0
-    # A nearer wall 20-40 degrees off the axes answers the side lobes, half the firings.
-    lobe = (deg >= 130) & (deg <= 150)
+    # A wall answers the side lobes at its own distance, half the firings, for 17.5 degrees
+    # either side of its plateau (a specular sonar hears a flat wall only from the foot of
+    # the perpendicular: ``sim_backend/kernels.py``). On a fast ring the streaks' pieces are
+    # many readings long; they are not walls of their own, nor is the wall's bearing theirs.
     rng = np.random.default_rng(7)
-    d[lobe] = np.where(rng.random(lobe.sum()) < 0.5, 0.8, np.inf)
-    assert _bearings(sweep_minima(b, d)) == [95]
+    b = _fine_ring()
+    off = np.abs(np.degrees(b) - 95.0)
+    d = np.full(len(b), np.inf)
+    d[off <= 30.0] = 1.0 + rng.normal(0.0, 0.02, int((off <= 30.0).sum()))
+    lobe = (off > 12.5) & (off <= 30.0)
+    d[lobe & (rng.random(len(b)) < 0.5)] = np.inf
+    (wall,) = sweep_minima(b, d)
+    assert abs(math.degrees(wall.bearing_rad) - 95.0) <= 5.0
     # A slow ring's sweep holds a wall in three samples: still an obstacle.
     slow = _ring(5.6)
     ds = np.full(len(slow), np.inf)
@@ -146,6 +150,70 @@ def test_stray_deep_readings_do_not_split_a_bent_wall_on_a_fast_ring():
     # A view past the bend some degrees wide (a doorway) still makes two.
     d[(deg > 356) | (deg < 4)] = 3.7
     assert len(sweep_minima(b, d)) == 2
+
+
+def _dense_junction(seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """A fast ring's sweep at a junction (about 700 readings), as the simulated sonar gives
+    it: three walls 1.36-1.42 m off, each answering the main beam over the 25 degrees of
+    axis that hold its normal (2 % dropped out) and the side lobes 17.5 degrees either side
+    of that half the time, with 1 cm + 1 % of noise; the rooms' far walls 4 m off between."""
+    rng = np.random.default_rng(seed)
+    b = _fine_ring()
+    deg = np.degrees(b)
+    d = np.full(len(b), 4.0)
+    answers = np.ones(len(b))
+    for normal, dist in ((47.5, 1.40), (167.5, 1.36), (287.5, 1.42)):
+        off = np.abs((deg - normal + 180.0) % 360.0 - 180.0)
+        d[off <= 30.0] = dist
+        answers[off <= 30.0] = np.where(off[off <= 30.0] <= 12.5, 0.98, 0.5)
+    d = d + rng.normal(0.0, 1.0, len(d)) * (0.01 + 0.01 * d)
+    d[rng.random(len(d)) > answers] = np.inf
+    return b, d
+
+
+def _near_walls(obs) -> list[float]:
+    return sorted(round(math.degrees(o.bearing_rad) % 360.0) for o in obs if o.distance_m < 2.0)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_dense_sweep_keeps_a_junctions_walls_through_noise_and_dropouts(seed):
+    # Hundreds of readings: the lowest is some 3.5 deviations low, and readings as many high
+    # broke the plateau from it; the side lobes' dropouts cut the rest into pieces.
+    b, d = _dense_junction(seed)
+    walls = _near_walls(sweep_minima(b, d))
+    assert len(walls) == 3, walls
+    for got, want in zip(walls, (47.5, 167.5, 287.5), strict=True):
+        assert abs(got - want) <= 5.0, walls
+
+
+def test_a_dense_sweep_keeps_a_wall_with_a_stray_echo_amid_it():
+    # fig12 seed 4 at a 4 ms firing interval: one echo 0.41 m amid a 1.3 m wall made the
+    # wall two slopes either side of it, and the junction's sweep found two walls.
+    b, d = _dense_junction(1)
+    deg = np.degrees(b)
+    d[np.flatnonzero((deg >= 165) & (deg <= 166))] = 0.41
+    walls = _near_walls(sweep_minima(b, d))
+    assert len(walls) == 3 and abs(walls[1] - 167.5) <= 5.0, walls
+
+
+def test_a_dense_sweep_reads_a_shallow_bend_as_one_wall():
+    # fig12's cut corner from a fast ring: the two faces of its 45-degree bend read 71
+    # degrees apart, the readings between no deeper than the bend's vertex, and with the
+    # block's corner behind they made a meet point the robot swept for minutes.
+    rng = np.random.default_rng(4)
+    b = _fine_ring()
+    deg = np.degrees(b)
+    d = np.full(len(b), 4.1)
+    d[(deg >= 36) & (deg <= 66)] = 1.36
+    between = (deg > 66) & (deg < 107)
+    d[between] = 1.36 + 0.14 * np.sin(np.pi * (deg[between] - 66) / 41)
+    d[(deg >= 107) & (deg <= 137)] = 1.41
+    d[(deg >= 220) & (deg <= 250)] = 1.40
+    d = d + rng.normal(0.0, 1.0, len(d)) * (0.01 + 0.01 * d)
+    assert len(_near_walls(sweep_minima(b, d))) == 2
+    # A door's view between the faces, some degrees wide, still parts them.
+    d[(deg >= 84) & (deg <= 90)] = 3.7
+    assert len(_near_walls(sweep_minima(b, d))) == 3
 
 
 def _bent_wall_with_an_outlier(step_deg: float) -> tuple[np.ndarray, np.ndarray]:

@@ -53,7 +53,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 _SETS: dict[str, dict[str, bool | float]] = {
     "centred_meet": {"centred_meet": True},
     "course_sign": {"course_sign": True},
-    "rejected_memory": {"rejected_memory": True},
+    "rejected_memory": {"rejected_memory": True},  # on by default since stop 34
     "sweep_fixed_frame": {"sweep_fixed_frame": True},
     "home_hold": {"home_hold_m": 0.15},
     "held_no_support": {},
