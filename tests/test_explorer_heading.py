@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 from hal.interfaces import NOMAD200_LIMITS
+from hal.registry import create_backend
 from tests.tracer_paths import STOP25
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
@@ -30,6 +31,44 @@ def test_a_look_alike_turned_by_half_a_turn_is_refused_unless_the_readings_are_f
     assert ex._heading_fits(b, a, 2)
     del ex.born[b]  # read before a restart, say: no reading to compare
     assert ex._heading_fits(b, a, 2)
+
+
+def test_two_places_of_one_merge_turned_apart_are_refused_unless_read_far_apart():
+    ex = Explorer(NOMAD200_LIMITS)
+    a = ex.map.add_meet(1.7, [rad(27), rad(172), rad(295)], (1.7, 2.5))
+    b = ex.map.add_meet(1.7, [rad(90), rad(140), rad(270)], (1.7, 1.7))
+    x = ex.map.add_meet(1.7, [rad(59), rad(204), rad(327)], (5.3, 2.5))  # a turned 32 deg
+    y = ex.map.add_meet(1.7, [rad(90), rad(140), rad(270)], (5.3, 1.7))  # b not turned
+    ex.born = {a: 10.0, b: 11.0, x: 52.0, y: 53.0}
+    h = Hypothesis({x: (a, 0), y: (b, 0)})
+    # Each alone is within 25 + 0.25 x 42 = 35.5 degrees of its old node...
+    assert ex._heading_fits(x, a, 0) and ex._heading_fits(y, b, 0)
+    # ... but read 1 m apart they turned 32 degrees apart: more than 21 + 0.25 x 2.
+    assert ex._heading_misfits(h) == [x, y]
+    ex.born[y] = 100.0  # 48 m on, dead reckoning may have turned that far in between
+    assert ex._heading_misfits(h) == []
+
+
+def test_fig1s_mirrored_bays_are_not_merged_on_a_fast_ring():
+    """fig1's two bays are mirror images. On a ring that fires every 4 ms (seed 6, drift
+    paper) the right bay's junction matched the left one's turned 32 degrees, within the
+    35 degrees its heading allowed, the junction beside it turned 0 degrees, and at 517 s
+    the bays were merged: 4 false merges, and 4 more at 1225 s."""
+    b = create_backend(
+        {"backend": "sim", "world": "fig1", "seed": 6, "drift": "paper", "fire_interval_s": 0.004}
+    )
+    robot = b.robot
+    ex = Explorer(b.limits, truth=lambda: (robot.true_pose().x, robot.true_pose().y))
+    with b:
+        clock = b.clock
+        while clock.now() < 700.0 and not ex.done:
+            twist, _ = ex.step(b.scan(), b.odometry(), b.status(), clock.now())
+            b.command(twist)
+            clock.sleep(0.1)
+    assert any("turned further than dead reckoning drifts" in n.text for n in ex.notes)
+    for record in ex.merges:
+        for _, _, td, tr in record.pairs:
+            assert math.dist(td, tr) < 1.0, ([n.text for n in ex.notes], record)
 
 
 def test_fig15_mirror_image_is_not_merged():

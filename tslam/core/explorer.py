@@ -165,6 +165,16 @@ class ExplorerParams:
     # readings, is not that place. It is what tells fig15's mirror images apart.
     heading_base_rad: float = math.radians(25.0)
     heading_drift_rad_per_m: float = math.radians(0.25)
+    # ... and the places one merge makes one are turned alike: the turns of two of its pairs
+    # differ by no more than this, plus the drift over the metres between their readings.
+    # Each turn is the drift since the old reading plus the sweep's error; the drift is
+    # shared by nodes read near each other. fig1's two bays are mirror images: on a fast
+    # ring a bay's junction matched the other's turned 32 degrees (its heading allowed 35),
+    # the junction 0.8 m from it matched turned 0 degrees, and the bays were merged. Over
+    # 27 true merges in 30 runs (fig1, fig12, fig13, fig14, fig16; seeds 1-3; drift paper
+    # and severe) the two turns of a merge differed by at most 17.7 degrees more than that
+    # drift.
+    heading_pair_rad: float = math.radians(21.0)
     # Over one edge dead reckoning is good (section V-C), so a merge that makes an edge a
     # loop needs its two ends about where the robot left and came back: within this much
     # and this fraction of the edge's length. fig1's mirrored rooms, 3.6 m apart along one
@@ -1905,20 +1915,50 @@ class Explorer:
     def _turn_fits(self, deps: tuple[float, ...], read_at_m: float, c: int, k: int) -> bool:
         """``_heading_fits`` for departures ``deps`` read at encoder distance ``read_at_m``:
         departure i is port ``(i + k) % degree`` of old node ``c``."""
+        turn = self._turn(deps, c, k)
+        if turn is None:
+            return True
+        p = self.p
+        return abs(turn[0]) <= p.heading_base_rad + p.heading_drift_rad_per_m * abs(
+            read_at_m - turn[1]
+        )
+
+    def _turn(self, deps: tuple[float, ...], c: int, k: int) -> tuple[float, float] | None:
+        """How far departures ``deps`` are turned from old node ``c``'s under rotation ``k``,
+        and the encoder distance ``c`` was read at; None if that says nothing (not a meet
+        point, another degree, no reading)."""
         bc = self.born.get(c)
         if bc is None or not self.map.has_node(c):
-            return True
+            return None
         nc = self.map.node(c)
         if nc.kind != "meet" or len(deps) != nc.degree:
-            return True
+            return None
         deg = nc.degree
         turns = [deps[j] - nc.departures_rad[(j + k) % deg] for j in range(deg)]
-        turn = math.atan2(sum(map(math.sin, turns)), sum(map(math.cos, turns)))
-        p = self.p
-        return abs(turn) <= p.heading_base_rad + p.heading_drift_rad_per_m * abs(read_at_m - bc)
+        return math.atan2(sum(map(math.sin, turns)), sum(map(math.cos, turns))), bc
 
     def _heading_misfits(self, h: Hypothesis) -> list[int]:
-        return [x for x, (c, k) in sorted(h.mapping.items()) if not self._heading_fits(x, c, k)]
+        """The nodes ``h`` maps turned further than dead reckoning drifts: from their old
+        nodes, or, failing that, the first two turned apart from each other."""
+        misfits = [x for x, (c, k) in sorted(h.mapping.items()) if not self._heading_fits(x, c, k)]
+        return misfits or self._turned_apart(h)
+
+    def _turned_apart(self, h: Hypothesis) -> list[int]:
+        turned = []  # node, turn, read at, old node read at
+        for x, (c, k) in sorted(h.mapping.items()):
+            bx = self.born.get(x)
+            if bx is None or not self.map.has_node(x) or self.map.node(x).kind != "meet":
+                continue
+            turn = self._turn(self.map.node(x).departures_rad, c, k)
+            if turn is not None:
+                turned.append((x, turn[0], bx, turn[1]))
+        p = self.p
+        for i, (x, t, bx, bc) in enumerate(turned):
+            for y, u, by, bd in turned[i + 1 :]:
+                drift = p.heading_drift_rad_per_m * (abs(bx - by) + abs(bc - bd))
+                if _angdiff(t, u) > p.heading_pair_rad + drift:
+                    return [x, y]
+        return []
 
     def _add_boundary(self, ev: BoundaryReached) -> int:
         truth = self.truth() if self.truth else None
