@@ -25,6 +25,7 @@ from tslam.programs.bench_explore import (
     targets,
 )
 from tslam.programs.cli import UserError, main
+from tslam.programs.sim_backends import BackendChoice
 from tslam.programs.sim_cmd import explore, report
 from tslam.programs.trace_cmd import tracer_params
 
@@ -122,8 +123,8 @@ def test_a_row_equals_the_report_of_the_same_run_in_process(capsys, tmp_path):
     out, err = capsys.readouterr()
     assert code == 0, err
     result = json.loads(out)
-    assert set(result) == {"tracer_switches_on", "runs", "summary", "targets"}
-    assert result["tracer_switches_on"] == []
+    assert set(result) == {"tracer_switches_on", "fire_interval_s", "runs", "summary", "targets"}
+    assert result["tracer_switches_on"] == [] and result["fire_interval_s"] is None
     [row] = result["runs"]
 
     task = Task("fig12", "none", 1, 120.0)
@@ -153,6 +154,30 @@ def test_a_tracer_switch_reaches_the_workers_and_the_result(capsys):
     assert [row[k] for k in moves] == [here[k] for k in moves]
     plain = explore("fig12", 1, "none", 120.0, progress=False)
     assert [report(plain, "fig12", 1, "none")[k] for k in moves] != [row[k] for k in moves]
+
+
+def test_a_firing_interval_reaches_the_workers_and_the_result(capsys):
+    code = main(["bench", "explore", "--json", *TINY, "--jobs", "1", "--fire-interval", "0.004"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    result = json.loads(out)
+    assert result["fire_interval_s"] == 0.004
+    [row] = result["runs"]
+    choice = BackendChoice(fire_interval_s=0.004)
+    run = explore("fig12", 1, "none", 120.0, progress=False, backend_choice=choice)
+    here = report(run, "fig12", 1, "none")
+    moves = ("path_over_gvg", "max_odometry_error_m")
+    assert [row[k] for k in moves] == [here[k] for k in moves]
+    plain = explore("fig12", 1, "none", 120.0, progress=False)
+    assert [report(plain, "fig12", 1, "none")[k] for k in moves] != [row[k] for k in moves]
+    assert "a transducer fired every 4 ms" in render_text(result)
+
+
+@pytest.mark.parametrize("value", ["0.001", "2", "nan"])
+def test_a_firing_interval_out_of_range_is_one_line(capsys, value):
+    assert main(["bench", "explore", *TINY, "--fire-interval", value]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "--fire-interval" in err and value in err
 
 
 def test_a_failing_worker_becomes_an_error_row():

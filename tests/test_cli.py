@@ -97,6 +97,20 @@ def test_unknown_world_gives_one_line(capsys):
     assert code == 2 and len(err.strip().splitlines()) == 1 and "fig99" in err
 
 
+def test_sim_with_a_ring_fired_fast_says_so_and_refuses_it_on_the_drivers(capsys):
+    code, out, _ = run(
+        capsys, "sim", "--world", "fig12", "--duration", "30", "--seed", "2", "--quiet",
+        "--fire-interval", "0.004",
+    )  # fmt: skip
+    assert code == 0 and json.loads(out)["fire_interval_s"] == 0.004
+    code, out, err = run(
+        capsys, "sim", "--world", "fig12", "--backend", "nomad200-emulated",
+        "--fire-interval", "0.004",
+    )  # fmt: skip
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert "--fire-interval" in err and "--backend sim" in err
+
+
 def test_sim_runs_and_writes_its_outputs(capsys, tmp_path):
     code, out, _ = run(
         capsys, "sim", "--world", "fig12", "--duration", "60", "--seed", "2",

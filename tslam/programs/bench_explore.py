@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from tslam.programs.cli import UserError
+from tslam.programs.sim_backends import BackendChoice, add_fire_interval, check_fire_interval
 
 DEFAULT_SEEDS = (1, 2, 3)
 _SEED_RE = re.compile(r"[0-9]+")
@@ -75,6 +76,7 @@ class Task(NamedTuple):
     seed: int
     duration_s: float
     switches: tuple[str, ...] = ()  # the tracer's, turned on (trace_cmd.SWITCHES)
+    fire_interval_s: float | None = None  # the simulated ring's; None: the Nomad's
 
 
 @dataclass(frozen=True)
@@ -115,6 +117,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="NAME",
         help="turn on one of the tracer's switches in every run (see tslam trace --help)",
     )
+    add_fire_interval(p)
     p.set_defaults(run=_run)
 
 
@@ -196,8 +199,15 @@ def run_one(task: Task) -> Row:
     from tslam.programs.trace_cmd import tracer_params
 
     tracer = tracer_params(list(task.switches))
+    choice = BackendChoice(fire_interval_s=task.fire_interval_s)
     run = explore(
-        task.world, task.seed, task.drift, task.duration_s, progress=False, tracer_params=tracer
+        task.world,
+        task.seed,
+        task.drift,
+        task.duration_s,
+        progress=False,
+        backend_choice=choice,
+        tracer_params=tracer,
     )
     return row_from_report(task, report(run, task.world, task.seed, task.drift))
 
@@ -387,9 +397,12 @@ def _label(row: Row) -> str:
 # ---------------------------------------------------------------------------------------------
 
 
-def result_of(rows: Sequence[Row], switches: Sequence[str] = ()) -> dict[str, Any]:
+def result_of(
+    rows: Sequence[Row], switches: Sequence[str] = (), fire_interval_s: float | None = None
+) -> dict[str, Any]:
     return {
         "tracer_switches_on": list(switches),
+        "fire_interval_s": fire_interval_s,
         "runs": list(rows),
         "summary": summarize(rows),
         "targets": targets(rows),
@@ -398,9 +411,11 @@ def result_of(rows: Sequence[Row], switches: Sequence[str] = ()) -> dict[str, An
 
 def render_text(result: dict[str, Any]) -> str:
     switches = result.get("tracer_switches_on")
+    fire = result.get("fire_interval_s")
     parts = [
         "T-SLAM vs the naive dead-reckoning baseline (FM = false merges)"
-        + (f"; tracer switches on: {', '.join(switches)}" if switches else ""),
+        + (f"; tracer switches on: {', '.join(switches)}" if switches else "")
+        + (f"; a transducer fired every {fire * 1000:g} ms" if fire else ""),
         "",
         _runs_table(result["runs"]),
         "",
@@ -525,7 +540,8 @@ def _run(args: argparse.Namespace) -> int:
     sel = parse_selection(args.worlds, args.drifts, args.seeds, args.jobs, args.duration)
     tracer_params(args.switch)  # a bad name is the user's error, before any run starts
     switches = tuple(sorted(set(args.switch)))
-    tasks = [t._replace(switches=switches) for t in sel.tasks()]
+    fire = check_fire_interval(args.fire_interval)
+    tasks = [t._replace(switches=switches, fire_interval_s=fire) for t in sel.tasks()]
     _say(
         f"bench explore: {len(tasks)} runs ({len(sel.worlds)} worlds x {len(sel.drifts)} drifts "
         f"x {len(sel.seeds)} seeds) on {min(sel.jobs, len(tasks))} workers"
@@ -534,7 +550,7 @@ def _run(args: argparse.Namespace) -> int:
     # Looked up at call time (not bound as a default) so a test can swap the worker.
     rows = collect(tasks, sel.jobs, worker=run_one)
     _say(f"bench explore: done in {time.perf_counter() - started:.1f} s")
-    result = result_of(rows, switches)
+    result = result_of(rows, switches, fire)
     as_json = json.dumps(result, indent=2) + "\n"
     as_text = render_text(result)
     if args.out:

@@ -64,6 +64,9 @@ COMPOSED = "nomad200+can-sonar-emulated"
 #: (``tests/test_fast_ring.py``), and the composed run maps fig12 as the in-process one does,
 #: as often (``tests/test_e2e_nomad200.py``).
 CAN_BOARD_SONAR_RATE = 1
+#: The range of the simulated ring's firing interval (``sim_backend.backend``).
+FIRE_INTERVAL_MIN_S = 0.004
+FIRE_INTERVAL_MAX_S = 1.0
 #: Host seconds the ring may wait for the board after a step before the run fails.
 REFRESH_TIMEOUT_S = 5.0
 #: Host seconds to wait for the emulator thread after it was told to stop.
@@ -77,6 +80,8 @@ class BackendChoice:
     kind: str = "sim"
     #: The emulated CAN board stops answering CONNECT after this many simulated seconds.
     can_stop_heartbeat_after_s: float | None = None
+    #: (sim) Seconds between two transducers' firings; None: the Nomad's 60 ms.
+    fire_interval_s: float | None = None
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -88,6 +93,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--can-stop-heartbeat-after", type=float, default=None, metavar="S",
         help=f"({COMPOSED}) the board stops answering CONNECT after S simulated seconds",
     )  # fmt: skip
+    add_fire_interval(parser)
+
+
+def add_fire_interval(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--fire-interval", type=float, default=None, metavar="S",
+        help="(sim) seconds between two transducers' firings, 0.004 to 1 (default 0.06, the "
+        "Nomad's own electronics; 0.004 fires the ring as the CAN sonar board does)",
+    )  # fmt: skip
+
+
+def check_fire_interval(value: float | None) -> float | None:
+    """``--fire-interval`` checked: a UserError naming it if out of range."""
+    if value is not None and not (FIRE_INTERVAL_MIN_S <= value <= FIRE_INTERVAL_MAX_S):
+        raise UserError(
+            f"--fire-interval must be between {FIRE_INTERVAL_MIN_S} and {FIRE_INTERVAL_MAX_S} "
+            f"seconds, got {value}"
+        )
+    return value
 
 
 def choice_from_args(args: argparse.Namespace) -> BackendChoice:
@@ -98,7 +122,10 @@ def choice_from_args(args: argparse.Namespace) -> BackendChoice:
             raise UserError(f"--can-stop-heartbeat-after needs --backend {COMPOSED}")
         if not (math.isfinite(stop) and stop >= 0):
             raise UserError(f"--can-stop-heartbeat-after must be seconds >= 0, got {stop}")
-    return BackendChoice(args.backend, stop)
+    fire = check_fire_interval(args.fire_interval)
+    if fire is not None and args.backend != "sim":
+        raise UserError("--fire-interval needs --backend sim (the drivers set their own rate)")
+    return BackendChoice(args.backend, stop, fire)
 
 
 def open_backend(
@@ -106,7 +133,10 @@ def open_backend(
 ) -> SimBackend | EmulatedRobot:
     """An unconfigured backend; both kinds have ``robot`` and ``world`` for scoring."""
     if choice.kind == "sim":
-        backend = create_backend({"backend": "sim", "world": world, "seed": seed, "drift": drift})
+        config: dict[str, object] = {"backend": "sim", "world": world, "seed": seed, "drift": drift}
+        if choice.fire_interval_s is not None:
+            config["fire_interval_s"] = choice.fire_interval_s
+        backend = create_backend(config)
         assert isinstance(backend, SimBackend)
         return backend
     if choice.kind not in BACKENDS:

@@ -196,6 +196,8 @@ def _run(args: argparse.Namespace) -> int:
     )
     rep = report(run, args.world, args.seed, args.drift)
     rep["backend"] = choice.kind
+    if choice.fire_interval_s is not None:
+        rep["fire_interval_s"] = choice.fire_interval_s
     if args.out:
         rep["outputs"] = write_outputs(run, rep, Path(args.out))
     print(json.dumps(rep, indent=2))
