@@ -62,8 +62,12 @@ SHALLOW_BEND_RATIO = 1.12
 #: each end it is the recess's back wall.
 RECESS_MIN_RAD = math.radians(15.0)
 RECESS_FRAME_RAD = math.radians(35.0)
-#: A sweep denser than a Nomad ring's turned twice (16 transducers, four firings each a turn)
-#: is first reduced to this many bearings, each the median of its readings.
+#: A sweep of more readings than this is a ring that fires fast (a CAN sonar board's: some 600
+#: a turn, where a Nomad ring's 16 transducers fire four times each, twice that when the
+#: turret turns twice) ...
+DENSE_READINGS = 256
+#: ... and is first reduced to this many bearings, each the median of its readings: as dense
+#: as a Nomad ring's sweep turned twice.
 DENSE_BINS = 128
 
 
@@ -171,7 +175,7 @@ def sweep_minima(
     order = np.argsort(np.mod(bearing_rad, 2 * math.pi), kind="stable")
     b = np.mod(bearing_rad[order], 2 * math.pi)
     d = distance_m[order]
-    if n > DENSE_BINS:
+    if n > DENSE_READINGS:
         # A ring that fires fast sweeps hundreds of readings, and with them its outliers
         # (0.41 m amid a wall's 1.3 m made the wall two slopes), dropouts (a wall cut into
         # pieces, each too short to count) and noise (the lowest of hundreds of readings some
