@@ -43,7 +43,7 @@ def test_two_places_of_one_merge_turned_apart_are_refused_unless_read_far_apart(
     h = Hypothesis({x: (a, 0), y: (b, 0)})
     # Each alone is within 25 + 0.25 x 42 = 35.5 degrees of its old node...
     assert ex._heading_fits(x, a, 0) and ex._heading_fits(y, b, 0)
-    # ... but read 1 m apart they turned 32 degrees apart: more than 21 + 0.25 x 2.
+    # ... but read 1 m apart they turned 32 degrees apart: more than 28 + 0.25 x 2.
     assert ex._heading_misfits(h) == [x, y]
     ex.born[y] = 100.0  # 48 m on, dead reckoning may have turned that far in between
     assert ex._heading_misfits(h) == []
