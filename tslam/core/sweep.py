@@ -182,12 +182,16 @@ def sweep_minima(
         # 3.5 deviations low, so readings as far high broke the plateau): at fig12's
         # junctions the sweep lost a wall so on most visits. The beam is 25 degrees wide, so
         # a median every 2.8 degrees loses nothing, and the rules below were made for such a
-        # sweep. Its pieces are joined over dropouts, and two faces with a shallow bend's
-        # vertex between them are one wall (fig12's cut corner read 71 degrees apart, a
-        # meet point swept for minutes): both hold on readings this clean.
+        # sweep. Two faces with a shallow bend's vertex between them are one wall (fig12's
+        # cut corner read 71 degrees apart, a meet point swept for minutes): that holds on
+        # readings this clean.
         b, d = _binned(b, d, DENSE_BINS)
         n = len(d)
         shallow = True
+        # The recess reading was made on a Nomad ring's sweeps; on these the robot lost
+        # fig16's indent more often (at drift paper, 4 ms a firing: seeds 1-8 complete 0
+        # times with it, 2 without).
+        recess = False
     dense = n < len(bearing_rad)
     claimed = np.full(n, -1)
     # Each reading stands for the sweep's mean spacing: a slow ring's few readings each cover
