@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 from hal import create_backend
-from tests.tracer_paths import without_recess
 from tslam.core.edgelength import EdgeOdometer
 from tslam.core.laws import step_onto_edge
 from tslam.core.sensing import Obstacle
@@ -163,7 +162,6 @@ def _fig16_seed2_trace() -> dict:
 def test_a_short_edge_is_measured_between_the_meet_points_the_sweeps_estimate(monkeypatch):
     """fig16 seed 2: the 0.36 m edge across the indent, homed 7 cm off at its far end. From
     where the robot stood it measured 0.42 m (19 %); from the sweeps' estimates, within 4 %."""
-    without_recess(monkeypatch)
     report = _fig16_seed2_trace()
     assert report["meet_to_meet_edges"] >= 3
     assert report["edge_length_error_max_rel"] <= 0.04

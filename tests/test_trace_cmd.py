@@ -9,7 +9,6 @@ import json
 import xml.etree.ElementTree as ET
 
 from hal.registry import create_backend
-from tests.tracer_paths import without_recess
 from tslam.programs.cli import main
 from tslam.programs.trace_cmd import run_trace
 
@@ -43,13 +42,11 @@ def test_trace_refuses_an_unknown_switch(tmp_path, capsys):
     assert not (tmp_path / "trace_report.json").exists()
 
 
-def test_centred_meet_homes_onto_more_of_the_junctions_it_passes(monkeypatch):
+def test_centred_meet_homes_onto_more_of_the_junctions_it_passes():
     """fig16 at drift paper, seeds 1, 3 and 5: the robot passed true meet points without
     homing 10 times (sweeps rejecting points it stood 1-3 cm off, homing given up on one
     missing echo); judged at the walls' centre, 4 times. Since stop 31 a sweep is judged at
-    its estimate by default (``spread_at_estimate``): 6 times. (Since stop 34 the ``recess``
-    reading is on, and passes 3 times with centred_meet or without: pinned off here.)"""
-    without_recess(monkeypatch)
+    its estimate by default (``spread_at_estimate``): 6 times."""
     unhomed = {}
     for on in (False, True):
         unhomed[on] = 0

@@ -9,12 +9,8 @@ they test, and the tracer only has to take the robot along that path. Stop 26's 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
-
-import pytest
 
 from tslam.core.tracer import TracerParams
-from tslam.programs import trace_cmd
 
 #: Stop 25's tracer: tracing from 0.15 m out of a departure whatever the ring sees, an edge
 #: ended wherever a wall comes within 0.45 m, one sweep at every meet point judged where the
@@ -27,18 +23,4 @@ STOP25 = TracerParams(
     sweep_again=False,
     edge_spike_ratio=math.inf,
     spread_at_estimate=False,
-    sweep_recess=False,
-    place_corners=False,
 )
-
-
-def without_recess(monkeypatch: pytest.MonkeyPatch) -> None:
-    """``tslam trace``'s tracer as it was before stop 34 turned the ``recess`` switch on: at
-    fig16's indent the sweep then reads the corridor's meet point and the weak one beside it
-    as one place of four edges, and the passes and short edges these tests measure are gone."""
-    default = trace_cmd.tracer_params
-    monkeypatch.setattr(
-        trace_cmd,
-        "tracer_params",
-        lambda sw: replace(default(sw), sweep_recess=False, place_corners=False),
-    )

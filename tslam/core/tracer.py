@@ -137,10 +137,10 @@ class TracerParams:
     # fig16's indent the corridor's meet point then finds the weak meet point 0.36 m off in
     # its place, and the indent's second edge, which the ring never shows on the move. But
     # not on every arrival (dropouts cut a corner or the wall too short to count), a place
-    # read with 3 edges on one visit and 4 on the next is hard to keep as one node. On since
-    # stop 34 (README, stop 33 and 34).
-    sweep_recess: bool = True
-    place_corners: bool = True
+    # read with 3 edges on one visit and 4 on the next is hard to keep as one node, and the
+    # benches complete fewer runs: off (README, stop 33).
+    sweep_recess: bool = False
+    place_corners: bool = False
     sensing: SensingParams = field(default_factory=SensingParams)
     boundary_clearance_m: float = 0.45  # the edge has run into its corner ...
     # ... if the corner is there: an echo this close ahead, within this angle of the way. A
