@@ -34,10 +34,10 @@ DRIFT = "paper"
 #: Per wire path, a seed whose exploration is right in process *and* through that path. The
 #: explorer is still sensitive to millimetres of odometry and to how the ring fires (issue 4):
 #: the protocols' quantisation, and the CAN board's ring fired whole every 100 ms, re-roll
-#: the run from the first meet point on. fig12 without drift, 900 s each, measured with the
-#: same code (stop 26: doorways, doubtful sweeps): in process seeds 2, 10, 11, 12 of 0-12
-#: complete, and 14, 15, 17, 20, 28, 31, 33-37, 39 of 13-40; through both emulators, of those
-#: 16, seeds 31 and 33; through the Nomad 200's alone, of 2, 10, 11 and 12, seeds 2 and 12.
+#: the run from the first meet point on. fig12 without drift, 900 s each: stop 26 measured in
+#: process seeds 2, 10, 11, 12 of 0-12 complete; through the Nomad 200's alone, of those, seeds
+#: 2 and 12. Stop 34, with a fast ring's sweep read in sectors: 30 of seeds 0-40 in process,
+#: 37 through both emulators (all but 13, 28, 30 and 33; seed 33 depends on the host's load).
 #: Where both are right, a difference is the path's.
 EXPLORE_SEEDS = {"nomad200-emulated": 12, COMPOSED: 31}
 EXPLORE_DRIFT = "none"
