@@ -1946,6 +1946,8 @@ class Explorer:
         return misfits or self._turned_apart(h)
 
     def _turned_apart(self, h: Hypothesis) -> list[int]:
+        """The first two meet points ``h`` maps whose turns from their old nodes differ by
+        more than ``heading_pair_rad`` and the drift between their readings; else none."""
         turned = []  # node, turn, read at, old node read at
         for x, (c, k) in sorted(h.mapping.items()):
             bx = self.born.get(x)

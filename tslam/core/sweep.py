@@ -168,6 +168,9 @@ def sweep_minima(
     are not one bent wall if a reading between them lies beyond the vertex their two faces
     would make (``_bend_vertex``). With ``recess`` a plateau that borders a lower run is
     still an obstacle if it is wide and framed by two nearer obstacles (``_recessed``).
+
+    A sweep of more than ``DENSE_READINGS`` readings (a ring that fires fast) is read as the
+    medians of ``DENSE_BINS`` sectors, with ``shallow`` on and ``recess`` off.
     """
     n = len(bearing_rad)
     if n < 3:
@@ -175,7 +178,8 @@ def sweep_minima(
     order = np.argsort(np.mod(bearing_rad, 2 * math.pi), kind="stable")
     b = np.mod(bearing_rad[order], 2 * math.pi)
     d = distance_m[order]
-    if n > DENSE_READINGS:
+    dense = n > DENSE_READINGS
+    if dense:
         # A ring that fires fast sweeps hundreds of readings, and with them its outliers
         # (0.41 m amid a wall's 1.3 m made the wall two slopes), dropouts (a wall cut into
         # pieces, each too short to count) and noise (the lowest of hundreds of readings some
@@ -192,7 +196,6 @@ def sweep_minima(
         # fig16's indent more often (at drift paper, 4 ms a firing: seeds 1-8 complete 0
         # times with it, 2 without).
         recess = False
-    dense = n < len(bearing_rad)
     claimed = np.full(n, -1)
     # Each reading stands for the sweep's mean spacing: a slow ring's few readings each cover
     # degrees, a fast ring's many a fraction of one.
