@@ -25,6 +25,11 @@ from sim_backend.simulator import SimParams, SimRobot
 from sim_backend.world import World, WorldError
 from sim_backend.world_files import load_world
 
+#: The range of ``fire_interval_s``: 4 ms a transducer is a ring in 64 ms, as fast as the CAN
+#: sonar board fires it.
+FIRE_INTERVAL_MIN_S = 0.004
+FIRE_INTERVAL_MAX_S = 1.0
+
 
 class SimClock:
     """Simulated time: ``sleep`` steps the simulator, so loops run as fast as the CPU allows."""
@@ -71,7 +76,9 @@ class SimBackend(Drive, Encoders, SonarRing):
             outlier_prob=opts.float("outliers", p.outlier_prob, lo=0.0, hi=1.0),
             side_lobe_prob=opts.float("side_lobes", p.side_lobe_prob, lo=0.0, hi=1.0),
             quantize_inch=opts.bool("quantize_inch", False),
-            fire_interval_s=opts.float("fire_interval_s", p.fire_interval_s, lo=0.004, hi=1.0),
+            fire_interval_s=opts.float(
+                "fire_interval_s", p.fire_interval_s, lo=FIRE_INTERVAL_MIN_S, hi=FIRE_INTERVAL_MAX_S
+            ),
             physics_dt_s=opts.float("physics_dt_s", p.physics_dt_s, lo=0.001, hi=0.2),
         )
         opts.finish()

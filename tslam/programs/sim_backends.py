@@ -42,7 +42,7 @@ from hal.errors import HalError
 from hal.interfaces import DriveLimits
 from hal.registry import create_backend
 from hal.types import DriveStatus, Odometry, SonarScan, Twist
-from sim_backend.backend import SimBackend
+from sim_backend.backend import FIRE_INTERVAL_MAX_S, FIRE_INTERVAL_MIN_S, SimBackend
 from sim_backend.emulators.can_sonar import CanSonarDevice, make_device
 from sim_backend.emulators.can_sonar_faults import BoardFaults
 from sim_backend.emulators.host import EmulatedDevice, EmulatorHost
@@ -64,9 +64,6 @@ COMPOSED = "nomad200+can-sonar-emulated"
 #: (``tests/test_fast_ring.py``), and the composed run maps fig12 as the in-process one does,
 #: as often (``tests/test_e2e_nomad200.py``).
 CAN_BOARD_SONAR_RATE = 1
-#: The range of the simulated ring's firing interval (``sim_backend.backend``).
-FIRE_INTERVAL_MIN_S = 0.004
-FIRE_INTERVAL_MAX_S = 1.0
 #: Host seconds the ring may wait for the board after a step before the run fails.
 REFRESH_TIMEOUT_S = 5.0
 #: Host seconds to wait for the emulator thread after it was told to stop.
