@@ -106,3 +106,80 @@ def test_one_edge_further_still_needs_the_signature():
     ex, j, b, c, node = past_the_junction(1.4)
     assert node not in (j, b, c)
     assert ex.notes[-1].text.startswith(f"lost (expected node {j}")
+
+
+def out_to_the_corner_and_back(ex: Explorer) -> tuple[float, int]:
+    """Junction A at (0, 0), departures 0, 90 and 200 deg; its 0-deg edge traced to a corner
+    1.5 m east and back. The encoder distance, and the departure the robot leaves by next."""
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    assert ex._choose(meet(0.0, 0.0, [0, 90, 200], None, None)) == 0
+    d = drive(ex, [(0.0, 0.0), (1.5, 0.0)], 0.0)
+    ex._on_boundary(BoundaryReached(0.0, 1.5, 0.0, 0.4, 1.5))
+    d = drive(ex, [(1.5, 0.0), (0.0, 0.0)], d)
+    k = ex._choose(meet(0.0, 0.0, [0, 90, 200], 0, 1.5))
+    assert k != 0 and ex.leaving == (1, k)
+    return d, k
+
+
+def test_the_mapped_corner_reached_again_by_another_departure_is_that_corner():
+    """Sent out by the 90-deg departure, the robot takes the 0-deg edge again and arrives
+    where the corner is: that boundary, not a second one of A (fig14 seed 2, switch recess:
+    the second one let a merge pair it with a look-alike 1.6 m away)."""
+    ex = Explorer(NOMAD200_LIMITS)
+    d, k = out_to_the_corner_and_back(ex)
+    drive(ex, [(0.0, 0.0), (1.5, 0.1)], d)
+    ex._on_boundary(BoundaryReached(0.0, 1.5, 0.1, 0.4, 1.5))
+    assert [n.kind for n in ex.map.nodes()] == ["meet", "boundary"]
+    assert ex.notes[-1].text == (
+        f"departure {k} of node 1 not held: went out by departure 0, back at boundary 2"
+    )
+    assert ex.map.node(1).ports[k] is None  # still to explore
+    assert ex.leaving == (2, 0)
+
+
+def test_a_corner_elsewhere_along_the_same_way_is_a_new_boundary():
+    """The same way out, but dead reckoning puts the corner 0.7 m from the mapped one."""
+    ex = Explorer(NOMAD200_LIMITS)
+    d, k = out_to_the_corner_and_back(ex)
+    drive(ex, [(0.0, 0.0), (1.0, 0.0), (1.4, 0.7)], d)
+    ex._on_boundary(BoundaryReached(0.0, 1.4, 0.7, 0.4, 1.5))
+    assert [n.kind for n in ex.map.nodes()] == ["meet", "boundary", "boundary"]
+    assert ex.map.node(1).ports[k] is not None
+
+
+def test_back_from_a_dead_end_a_junction_read_with_an_edge_fewer_is_the_one_left():
+    """A place read with four edges (fig13's 0.29 m pair) is left for the dead end of its
+    second point; back from it, the robot homes onto the first point and reads three, the
+    edge it came in by 40 degrees off the dead end's: the same place by dead reckoning, not a
+    new node (fig13 seed 1, switch hold_on, 87 s)."""
+    ex = Explorer(NOMAD200_LIMITS)
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    first = [2, 75, 186, 293]
+    assert ex._choose(meet(0.0, 0.0, first, 186, 3.9)) == 3
+    out = math.radians(293)
+    corner = (1.4 * math.cos(out), 1.4 * math.sin(out))
+    d = drive(ex, [(0.0, 0.0), corner], 0.0)
+    ex._on_boundary(BoundaryReached(0.0, *corner, 0.4, 1.4))
+    drive(ex, [corner, (0.0, 0.02)], d)
+    node, pm = ex._arrive(meet(0.0, 0.02, [72, 191, 333], 333, 1.4))
+    assert node == 1 and len(ex.map.nodes()) == 2
+    assert ex.notes[-1].text == (
+        "node 1 confirmed by dead reckoning (back from boundary 2) although read with "
+        "degree 3, not 4"
+    )
+    # Ports 2, 75, 186 and 293 deg: the 2-deg one leads off along the arrival's 333 too.
+    assert pm.index == (2, 0, 1, 2) and pm.arrival == 3
+
+
+def test_read_with_an_edge_fewer_at_another_junction_is_not_the_one_left():
+    """The same reading 0.6 m from where the robot left the place: lost, as before."""
+    ex = Explorer(NOMAD200_LIMITS)
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    assert ex._choose(meet(0.0, 0.0, [2, 75, 186, 293], 186, 3.9)) == 3
+    out = math.radians(293)
+    corner = (1.4 * math.cos(out), 1.4 * math.sin(out))
+    d = drive(ex, [(0.0, 0.0), corner], 0.0)
+    ex._on_boundary(BoundaryReached(0.0, *corner, 0.4, 1.4))
+    drive(ex, [corner, (0.6, 0.0)], d)
+    node, _ = ex._arrive(meet(0.6, 0.0, [72, 191, 333], 333, 1.4))
+    assert node != 1 and ex.notes[-1].text.startswith("lost (expected node 1")

@@ -122,6 +122,9 @@ class ExplorerParams:
     bounce_far_m: float = 20.0
     bounce_rel: float = 0.02
     bounce_retries: int = 1
+    # A dead end reached again by another departure is the one mapped if dead reckoning
+    # puts it this close (corners are homed less precisely than meet points).
+    boundary_again_m: float = 0.5
     # Homed again this close after leaving a meet point, and read with another number of
     # edges: the two points are one place (``Explorer._reread``, ``_read_place``).
     place_hop_m: float = 0.45
@@ -668,26 +671,35 @@ class Explorer:
         a = ev.arrival_index
         assert a is not None
         k = self._match(ev, seen, a, w, q, length, edge.length_m, slack)
-        dead_end = (
-            k is None
-            and self.map.node(f).kind == "boundary"
-            and self.map.node(w).degree == ev.degree
-        )
+        back = k is None and self.map.node(f).kind == "boundary"
+        dead_end = back and self.map.node(w).degree == ev.degree
         # None when no recent pass can say; a twin junction a few decimetres on has the same
         # topology from a dead end.
-        left_here = self._where_the_pass_left(ev, f, e) if dead_end else None
+        left_here = self._where_the_pass_left(ev, f, e) if back else None
         if dead_end and tol.length_ok(length, edge.length_m) and left_here is not False:
             # Back from a dead end there is one place to arrive at; only the signature's
             # noisier parts (clearance, a departure angle) disagree: trust the topology.
             k = (q - a) % ev.degree
             self._note(f"node {w} confirmed by topology alone (back from boundary {f})")
-        elif left_here:
+        elif left_here and dead_end:
             # One edge's length is off (the way in wandered at the corner), but the robot has
             # homed where it left for the dead end minutes ago, by dead reckoning over a few
             # metres: the same junction. The length is not recorded.
             self._note(f"node {w} confirmed by dead reckoning (back from boundary {f})")
             self.partial_m = 0.0
             return w, (q - a) % ev.degree
+        elif left_here and (pm := self._read_where_left(ev, w, q)) is not None:
+            # The same, read with an edge more or fewer: back from fig13's boundary 16 the
+            # robot homed onto the other meet point of the 0.29 m pair it had read as one
+            # place, whose edge to the pair's first point came in 40 degrees off the dead
+            # end's, and the place went into the map twice (seed 1, switch hold_on).
+            self._note(
+                f"node {w} confirmed by dead reckoning (back from boundary {f}) although read "
+                f"with degree {ev.degree}, not {self.map.node(w).degree}"
+            )
+            self.partial_m = 0.0
+            self._misread = w
+            return w, pm
         if k is not None:
             if length is not None and not self.disturbed:
                 self.map.add_measurement(e, length)
@@ -919,6 +931,32 @@ class Explorer:
             )
         self.partial_m = 0.0
         return node, 0
+
+    def _read_where_left(self, ev: MeetPointReached, w: int, q: int) -> PortMap | None:
+        """The port map of ``w``, read with another degree where the robot left it for a dead
+        end moments ago: each port is the departure nearest its bearing as read then, both in
+        the odometry frame (the heading drifts little over the way there and back). None
+        unless the last visit was to ``w`` and every departure of the smaller reading but
+        the arrival's has its counterpart within the angle tolerance."""
+        lv, a = self._last_visit, ev.arrival_index
+        if lv is None or lv[0] != w or a is None or self.map.node(w).kind != "meet":
+            return None
+        _, deps, pm, _, _ = lv
+        tol = self._tol().angle_rad
+        index, agree = [], 0
+        for p, i in enumerate(pm.index):
+            if p == q:
+                index.append(a)
+                continue
+            k = min(
+                (k for k in range(ev.degree) if k != a or ev.degree < len(pm.index)),
+                key=lambda k: _angdiff(ev.departures_rad[k], deps[i]),
+            )
+            index.append(k)
+            agree += _angdiff(ev.departures_rad[k], deps[i]) <= tol
+        if agree < min(ev.degree, len(pm.index)) - 1:
+            return None
+        return PortMap(tuple(index), q)
 
     def _where_the_pass_left(self, ev: MeetPointReached, f: int, e: int) -> bool | None:
         """Whether the robot, back along edge ``e`` from ``f``, has homed where the recorded
@@ -1273,8 +1311,49 @@ class Explorer:
             self._note(f"expected node {w} after edge {e}, found a boundary: node {b}")
             self._leave(b, 0)
             return
-        if not self._walked_to_boundary(ev, length, back=True):
-            self._boundary_on_new_edge(ev, f, self._departure_taken(f, j), length)
+        if self._walked_to_boundary(ev, length, back=True) or self._boundary_again(
+            ev, f, j, length
+        ):
+            return
+        self._boundary_on_new_edge(ev, f, self._departure_taken(f, j), length)
+
+    def _boundary_again(self, ev: BoundaryReached, f: int, j: int, length: float | None) -> bool:
+        """Sent out by unexplored departure ``j`` of junction ``f``, the robot went out by
+        a mapped one to a dead end and arrived there again: the way out is along it, the
+        length agrees and, if the robot has just been there, so does dead reckoning. Then
+        it is that boundary, and ``j`` is still to explore. Mapped as a second boundary of
+        ``f`` at the same corner, it let a merge pair that node with a look-alike 1.6 m
+        away (fig14 seed 2 at drift paper with the switch ``recess``, 12845 s: a false
+        merge)."""
+        out = self._way_out(f)
+        if out is None or self.map.node(f).kind != "meet":
+            return False
+        bearing, deps = out
+        p = _nearest(bearing, deps)
+        e = self.map.node(f).ports[p]
+        if p == j or e is None:
+            return False
+        edge = self.map.edge(e)
+        b, q = edge.other_end(f, p)
+        if (
+            self.map.node(b).kind != "boundary"
+            or _angdiff(deps[p], bearing) + self.p.departure_taken_margin_rad
+            > _angdiff(deps[j], bearing)
+            or not self._tol().length_ok(length, edge.length_m)
+        ):
+            return False
+        old = self._recent_pass(e)
+        if old is not None:
+            x, y = old.at(old.length_m if old.start == f else 0.0)
+            if math.hypot(ev.x_m - x, ev.y_m - y) > self.p.boundary_again_m:
+                return False
+        self._count_bounce((f, j))
+        self._note(
+            f"departure {j} of node {f} not held: went out by departure {p}, back at boundary {b}"
+        )
+        self.plan = []
+        self._leave(b, q)
+        return True
 
     def _boundary_bounce(self, ev: BoundaryReached, f: int, j: int, length: float | None) -> bool:
         """Back in the corner just left, moments later (the edge out of it was not held):
