@@ -137,6 +137,19 @@ def test_the_mapped_corner_reached_again_by_another_departure_is_that_corner():
     assert ex.leaving == (2, 0)
 
 
+def test_the_mapped_corner_reached_by_a_way_between_two_departures_is_that_corner():
+    """The way out heads between the 0 and 90-deg departures before it bends to the corner:
+    it says neither, but dead reckoning puts the robot 3 cm from where it was there moments
+    ago (fig1 seed 6 without drift, switch hold_on, 477 s: the corner mapped twice)."""
+    ex = Explorer(NOMAD200_LIMITS)
+    d, k = out_to_the_corner_and_back(ex)
+    assert k == 1  # the 90-deg departure
+    drive(ex, [(0.0, 0.0), (0.6, 0.6), (1.5, 0.03)], d)
+    ex._on_boundary(BoundaryReached(0.0, 1.5, 0.03, 0.4, 1.5))
+    assert [n.kind for n in ex.map.nodes()] == ["meet", "boundary"]
+    assert ex.notes[-1].text.endswith("went out by departure 0, back at boundary 2")
+
+
 def test_a_corner_elsewhere_along_the_same_way_is_a_new_boundary():
     """The same way out, but dead reckoning puts the corner 0.7 m from the mapped one."""
     ex = Explorer(NOMAD200_LIMITS)

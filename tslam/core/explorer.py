@@ -123,7 +123,12 @@ class ExplorerParams:
     bounce_rel: float = 0.02
     bounce_retries: int = 1
     # A dead end reached again by another departure is the one mapped if dead reckoning
-    # puts it this close (corners are homed less precisely than meet points).
+    # puts it this close to where the robot last was there, whichever way it went out
+    # (two corners of one junction are further apart: each is some 0.45 m from both its
+    # walls) ...
+    boundary_same_m: float = 0.3
+    # ... or this close, if the way out was along that departure (corners are homed less
+    # precisely than meet points).
     boundary_again_m: float = 0.5
     # Homed again this close after leaving a meet point, and read with another number of
     # edges: the two points are one place (``Explorer._reread``, ``_read_place``).
@@ -1319,41 +1324,48 @@ class Explorer:
 
     def _boundary_again(self, ev: BoundaryReached, f: int, j: int, length: float | None) -> bool:
         """Sent out by unexplored departure ``j`` of junction ``f``, the robot went out by
-        a mapped one to a dead end and arrived there again: the way out is along it, the
-        length agrees and, if the robot has just been there, so does dead reckoning. Then
-        it is that boundary, and ``j`` is still to explore. Mapped as a second boundary of
-        ``f`` at the same corner, it let a merge pair that node with a look-alike 1.6 m
-        away (fig14 seed 2 at drift paper with the switch ``recess``, 12845 s: a false
-        merge)."""
-        out = self._way_out(f)
-        if out is None or self.map.node(f).kind != "meet":
+        a mapped one to a dead end and arrived there again: the length agrees, and dead
+        reckoning puts it where the robot has just been, or the way out is along that
+        departure and dead reckoning does not say otherwise. Then it is that boundary, and
+        ``j`` is still to explore. Mapped as a second boundary of ``f`` at the same corner,
+        it let a merge pair that node with a look-alike 1.6 m away (fig14 seed 2 at drift
+        paper with the switch ``recess``, 12845 s: a false merge); and fig1's room corner
+        (seed 6 without drift, switch hold_on, 477 s) went into the map twice, reached 3 cm
+        from where it had been 16 s before, the way out halfway between two departures."""
+        if self.map.node(f).kind != "meet":
             return False
-        bearing, deps = out
-        p = _nearest(bearing, deps)
-        e = self.map.node(f).ports[p]
-        if p == j or e is None:
-            return False
-        edge = self.map.edge(e)
-        b, q = edge.other_end(f, p)
-        if (
-            self.map.node(b).kind != "boundary"
-            or _angdiff(deps[p], bearing) + self.p.departure_taken_margin_rad
-            > _angdiff(deps[j], bearing)
-            or not self._tol().length_ok(length, edge.length_m)
-        ):
-            return False
-        old = self._recent_pass(e)
-        if old is not None:
-            x, y = old.at(old.length_m if old.start == f else 0.0)
-            if math.hypot(ev.x_m - x, ev.y_m - y) > self.p.boundary_again_m:
-                return False
-        self._count_bounce((f, j))
-        self._note(
-            f"departure {j} of node {f} not held: went out by departure {p}, back at boundary {b}"
-        )
-        self.plan = []
-        self._leave(b, q)
-        return True
+        out, tol, p = self._way_out(f), self._tol(), self.p
+        along = None if out is None else _nearest(*out)
+        if out is not None and along is not None:
+            bearing, deps = out
+            if along == j or _angdiff(deps[along], bearing) + p.departure_taken_margin_rad > (
+                _angdiff(deps[j], bearing)
+            ):
+                along = None
+        for k, e in enumerate(self.map.node(f).ports):
+            if k == j or e is None:
+                continue
+            edge = self.map.edge(e)
+            b, q = edge.other_end(f, k)
+            if self.map.node(b).kind != "boundary" or not tol.length_ok(length, edge.length_m):
+                continue
+            old = self._recent_pass(e)
+            off = None
+            if old is not None:
+                x, y = old.at(old.length_m if old.start == f else 0.0)
+                off = math.hypot(ev.x_m - x, ev.y_m - y)
+            if (off is not None and off <= p.boundary_same_m) or (
+                k == along and (off is None or off <= p.boundary_again_m)
+            ):
+                self._count_bounce((f, j))
+                self._note(
+                    f"departure {j} of node {f} not held: went out by departure {k}, back at "
+                    f"boundary {b}"
+                )
+                self.plan = []
+                self._leave(b, q)
+                return True
+        return False
 
     def _boundary_bounce(self, ev: BoundaryReached, f: int, j: int, length: float | None) -> bool:
         """Back in the corner just left, moments later (the edge out of it was not held):
