@@ -9,7 +9,7 @@ from hal.interfaces import NOMAD200_LIMITS
 from hal.types import Odometry
 from tests.test_explorer_split import drive, meet
 from tslam.core.explorer import Explorer
-from tslam.core.tracer import BoundaryReached
+from tslam.core.tracer import BoundaryReached, MeetPointReached
 from tslam.programs.sim_cmd import explore
 
 
@@ -160,21 +160,26 @@ def test_a_corner_elsewhere_along_the_same_way_is_a_new_boundary():
     assert ex.map.node(1).ports[k] is not None
 
 
-def test_back_from_a_dead_end_a_junction_read_with_an_edge_fewer_is_the_one_left():
-    """A place read with four edges (fig13's 0.29 m pair) is left for the dead end of its
-    second point; back from it, the robot homes onto the first point and reads three, the
-    edge it came in by 40 degrees off the dead end's: the same place by dead reckoning, not a
-    new node (fig13 seed 1, switch hold_on, 87 s)."""
-    ex = Explorer(NOMAD200_LIMITS)
+def back_from_the_place_s_dead_end(ex: Explorer, home: tuple[float, float]) -> MeetPointReached:
+    """A place read with four edges (2, 75, 186 and 293 deg) at (0, 0), left by its 293-deg
+    edge for a corner 1.4 m on and back to ``home``, where the robot reads three edges: the
+    two that agree (72 and 191) and the one it came in by, 40 degrees off the corner's."""
     ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    first = [2, 75, 186, 293]
-    assert ex._choose(meet(0.0, 0.0, first, 186, 3.9)) == 3
+    assert ex._choose(meet(0.0, 0.0, [2, 75, 186, 293], 186, 3.9)) == 3
     out = math.radians(293)
     corner = (1.4 * math.cos(out), 1.4 * math.sin(out))
     d = drive(ex, [(0.0, 0.0), corner], 0.0)
     ex._on_boundary(BoundaryReached(0.0, *corner, 0.4, 1.4))
-    drive(ex, [corner, (0.0, 0.02)], d)
-    node, pm = ex._arrive(meet(0.0, 0.02, [72, 191, 333], 333, 1.4))
+    drive(ex, [corner, home], d)
+    return meet(*home, [72, 191, 333], 333, 1.4)
+
+
+def test_back_from_a_dead_end_a_junction_read_with_an_edge_fewer_is_the_one_left():
+    """fig13's 0.29 m pair, read as its place with four edges, is left for the dead end of its
+    second point; back from it, the robot homes onto the first point and reads three: the
+    same place by dead reckoning, not a new node (fig13 seed 1, switch hold_on, 87 s)."""
+    ex = Explorer(NOMAD200_LIMITS)
+    node, pm = ex._arrive(back_from_the_place_s_dead_end(ex, (0.0, 0.02)))
     assert node == 1 and len(ex.map.nodes()) == 2
     assert ex.notes[-1].text == (
         "node 1 confirmed by dead reckoning (back from boundary 2) although read with "
@@ -187,12 +192,5 @@ def test_back_from_a_dead_end_a_junction_read_with_an_edge_fewer_is_the_one_left
 def test_read_with_an_edge_fewer_at_another_junction_is_not_the_one_left():
     """The same reading 0.6 m from where the robot left the place: lost, as before."""
     ex = Explorer(NOMAD200_LIMITS)
-    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    assert ex._choose(meet(0.0, 0.0, [2, 75, 186, 293], 186, 3.9)) == 3
-    out = math.radians(293)
-    corner = (1.4 * math.cos(out), 1.4 * math.sin(out))
-    d = drive(ex, [(0.0, 0.0), corner], 0.0)
-    ex._on_boundary(BoundaryReached(0.0, *corner, 0.4, 1.4))
-    drive(ex, [corner, (0.6, 0.0)], d)
-    node, _ = ex._arrive(meet(0.6, 0.0, [72, 191, 333], 333, 1.4))
+    node, _ = ex._arrive(back_from_the_place_s_dead_end(ex, (0.6, 0.0)))
     assert node != 1 and ex.notes[-1].text.startswith("lost (expected node 1")
