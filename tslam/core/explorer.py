@@ -843,21 +843,27 @@ class Explorer:
             return None
         return math.atan2(out[1] - y, out[0] - x), [deps[i] for i in pm.index]
 
+    def _clearly_out_by(self, f: int, j: int) -> int | None:
+        """The port of ``f`` other than ``j`` that the recorded way out is along, clearly
+        nearer than ``j``'s (``departure_taken_margin_rad``); None if the way does not say."""
+        out = self._way_out(f)
+        if out is None:
+            return None
+        bearing, deps = out
+        p = _nearest(bearing, deps)
+        off = _angdiff(deps[p], bearing)
+        if p == j or off + self.p.departure_taken_margin_rad > _angdiff(deps[j], bearing):
+            return None
+        return p
+
     def _departure_taken(self, f: int, j: int) -> int:
         """The unexplored departure of ``f`` the robot went out by: ``j`` as planned, unless
         its recorded way out is clearly along another unexplored one. Leaving fig16's
         corridor junction for the indent, the trace law took the corridor's two walls 0.15 m
         out and went down the corridor; the edge was mapped as the indent's, and the robot
         went lost when it came back up by the corridor's departure (seed 4, switch vertex)."""
-        out = self._way_out(f) if self.p.departure_taken else None
-        if out is None:
-            return j
-        bearing, deps = out
-        p = _nearest(bearing, deps)
-        if p == j or self.map.node(f).ports[p] is not None:
-            return j
-        off = _angdiff(deps[p], bearing)
-        if off + self.p.departure_taken_margin_rad > _angdiff(deps[j], bearing):
+        p = self._clearly_out_by(f, j) if self.p.departure_taken else None
+        if p is None or self.map.node(f).ports[p] is not None:
             return j
         self._note(f"departure {j} of node {f} not held: went out by departure {p}")
         self.leaving = (f, p)
@@ -966,11 +972,19 @@ class Explorer:
     def _where_the_pass_left(self, ev: MeetPointReached, f: int, e: int) -> bool | None:
         """Whether the robot, back along edge ``e`` from ``f``, has homed where the recorded
         pass over ``e`` met its far node; None when there is no recent pass to say."""
+        off = self._off_the_pass_end(ev, f, e)
+        return None if off is None else off <= self.p.twin_m
+
+    def _off_the_pass_end(
+        self, ev: MeetPointReached | BoundaryReached, f: int, e: int
+    ) -> float | None:
+        """How far ``ev`` is from where the recorded pass over edge ``e`` met its far node
+        from ``f``; None when there is no recent pass to say."""
         old = self._recent_pass(e)
         if old is None:
             return None
         x, y = old.at(old.length_m if old.start == f else 0.0)
-        return math.hypot(ev.x_m - x, ev.y_m - y) <= self.p.twin_m
+        return math.hypot(ev.x_m - x, ev.y_m - y)
 
     def _recent_pass(self, e: int) -> EdgePath | None:
         """The recorded pass over edge ``e``, if the robot has travelled little since."""
@@ -1334,14 +1348,7 @@ class Explorer:
         from where it had been 16 s before, the way out halfway between two departures."""
         if self.map.node(f).kind != "meet":
             return False
-        out, tol, p = self._way_out(f), self._tol(), self.p
-        along = None if out is None else _nearest(*out)
-        if out is not None and along is not None:
-            bearing, deps = out
-            if along == j or _angdiff(deps[along], bearing) + p.departure_taken_margin_rad > (
-                _angdiff(deps[j], bearing)
-            ):
-                along = None
+        along, tol, p = self._clearly_out_by(f, j), self._tol(), self.p
         for k, e in enumerate(self.map.node(f).ports):
             if k == j or e is None:
                 continue
@@ -1349,11 +1356,7 @@ class Explorer:
             b, q = edge.other_end(f, k)
             if self.map.node(b).kind != "boundary" or not tol.length_ok(length, edge.length_m):
                 continue
-            old = self._recent_pass(e)
-            off = None
-            if old is not None:
-                x, y = old.at(old.length_m if old.start == f else 0.0)
-                off = math.hypot(ev.x_m - x, ev.y_m - y)
+            off = self._off_the_pass_end(ev, f, e)
             if (off is not None and off <= p.boundary_same_m) or (
                 k == along and (off is None or off <= p.boundary_again_m)
             ):
