@@ -154,19 +154,22 @@ def test_traced_edges_measure_within_three_percent(tmp_path, capsys):
     assert report["edge_length_error_median_rel"] <= 0.01
 
 
-def _fig16_seed2_trace() -> dict:
-    backend = create_backend({"backend": "sim", "world": "fig16", "seed": 2, "drift": "paper"})
+def _fig1_seed1_trace() -> dict:
+    backend = create_backend({"backend": "sim", "world": "fig1", "seed": 1, "drift": "paper"})
     return run_trace(backend, 12).report
 
 
-def test_a_short_edge_is_measured_between_the_meet_points_the_sweeps_estimate(monkeypatch):
-    """fig16 seed 2: the 0.36 m edge across the indent, homed 7 cm off at its far end. From
-    where the robot stood it measured 0.42 m (19 %); from the sweeps' estimates, within 4 %."""
-    report = _fig16_seed2_trace()
-    assert report["meet_to_meet_edges"] >= 3
-    assert report["edge_length_error_max_rel"] <= 0.04
+def test_an_edge_is_measured_between_the_meet_points_the_sweeps_estimate(monkeypatch):
+    """fig1 seed 1: the robot homes a few centimetres past the room's 2.03 m edge's end. From
+    where it stood the edge measured 2.15 m (5.8 %); from the sweeps' estimates every edge of
+    the trace is within 2 %. (Stop 31 pinned this on fig16 seed 2's 0.36 m edge across the
+    indent, 19 % against 4 %; since stop 36 the sweep reads the indent's recess, and that
+    trace measures two edges meet point to meet point, neither of them that one.)"""
+    report = _fig1_seed1_trace()
+    assert report["meet_to_meet_edges"] >= 10
+    assert report["edge_length_error_max_rel"] <= 0.025
     default = trace_cmd.tracer_params
     monkeypatch.setattr(
         trace_cmd, "tracer_params", lambda sw: replace(default(sw), length_at_estimate=False)
     )
-    assert _fig16_seed2_trace()["edge_length_error_max_rel"] > 0.1
+    assert _fig1_seed1_trace()["edge_length_error_max_rel"] > 0.05

@@ -15,7 +15,8 @@ from tslam.core.tracer import TracerParams
 #: Stop 25's tracer: tracing from 0.15 m out of a departure whatever the ring sees, an edge
 #: ended wherever a wall comes within 0.45 m, one sweep at every meet point judged where the
 #: robot stands, and an edge's length taken over its whole chain (stop 31 judges the sweep
-#: at its estimate and drops the chain's spikes: edgelength.py).
+#: at its estimate and drops the chain's spikes: edgelength.py), its sweep reading no recess
+#: and its places no meet point of three corners (on since stop 36).
 STOP25 = TracerParams(
     depart_until_sides_m=0.0,
     corner_ahead_m=math.inf,
@@ -23,4 +24,6 @@ STOP25 = TracerParams(
     sweep_again=False,
     edge_spike_ratio=math.inf,
     spread_at_estimate=False,
+    sweep_recess=False,
+    place_corners=False,
 )

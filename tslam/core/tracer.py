@@ -132,15 +132,16 @@ class TracerParams:
     # them lies beyond the vertex their faces would make (sweep.py); at fig16's indent a
     # corner and the wall behind it were joined so, and the corridor's meet point rejected.
     sweep_vertex: bool = False
-    # The switch ``recess``: a wall set back between two nearer obstacles is one of its own
-    # (sweep.py), and a place's meet points are sought as three corners' too (place.py). At
-    # fig16's indent the corridor's meet point then finds the weak meet point 0.36 m off in
-    # its place, and the indent's second edge, which the ring never shows on the move. But
-    # not on every arrival (dropouts cut a corner or the wall too short to count), a place
-    # read with 3 edges on one visit and 4 on the next is hard to keep as one node, and the
-    # benches complete fewer runs: off (README, stop 33).
-    sweep_recess: bool = False
-    place_corners: bool = False
+    # ``recess`` (on since stop 36): a wall set back between two nearer obstacles is one of
+    # its own (sweep.py), and a place's meet points are sought as three corners' too
+    # (place.py). At fig16's indent the corridor's meet point then finds the weak meet point
+    # 0.36 m off in its place, and the indent's second edge, which the ring never shows on the
+    # move. Not on every arrival (dropouts cut a corner or the wall too short to count), and
+    # a place read with 3 edges on one visit and 4 on the next is hard to keep as one node;
+    # stop 35's dead-end reads (explorer.py) removed the false merge that kept it off. Over
+    # issue 3's 30 traces it meets the edge-length target in 25 against 23 (README, stop 36).
+    sweep_recess: bool = True
+    place_corners: bool = True
     sensing: SensingParams = field(default_factory=SensingParams)
     boundary_clearance_m: float = 0.45  # the edge has run into its corner ...
     # ... if the corner is there: an echo this close ahead, within this angle of the way. A
