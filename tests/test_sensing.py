@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from hal.types import Odometry, SonarScan
-from tslam.core.sensing import RingSensor, local_minima
+from tslam.core.sensing import RingSensor, SensingParams, local_minima
 
 
 def ring_points(ranges, n=None):
@@ -148,3 +148,48 @@ def test_two_faces_of_a_flat_bend_are_one_obstacle_up_to_the_bend_angle():
 def test_two_minima_are_two_obstacles_unless_they_could_be_one_bend(between, far_face):
     obs = local_minima(_cut_corner(between, far_face), bend_merge_rad=math.radians(60.0))
     assert len([o for o in obs if o.distance_m < 2]) == 3
+
+
+def _corner_in_the_gap(gap_hold_s: float) -> tuple[RingSensor, list[float], np.ndarray]:
+    """Transducer 0 hears a cabinet's corner 0.83 m ahead (twice: a lone short reading is
+    held as a spike); then the robot turns 11.25 degrees, which puts the corner 15.5 degrees
+    off the axes of transducers 0 and 15 both (the beam is +/-12.5), and transducer 0 hears
+    the wall beyond, 3 m off."""
+    sensor = RingSensor(SensingParams(gap_hold_s=gap_hold_s))
+    far = [3.0] * 16
+    far[8] = 2.5  # a wall behind
+    stamps = np.zeros(16)
+    sensor.update(_scan(far, stamps), Odometry(0.0, 0.0, 0.0, 0.0, 0.0))
+    near = list(far)
+    near[0] = 0.6
+    for t in (0.1, 0.2):
+        stamps[0] = t
+        sensor.update(_scan(near, stamps), Odometry(0.0, 0.0, 0.0, 0.0, t))
+    stamps[0] = 0.4
+    return sensor, far, stamps
+
+
+def test_a_corner_that_slips_between_two_beams_is_kept_where_it_was():
+    turned = Odometry(0.0, 0.0, math.radians(11.25), 0.0, 0.4)
+    sensor, far, stamps = _corner_in_the_gap(0.0)
+    assert min(o.distance_m for o in sensor.update(_scan(far, stamps), turned)) > 2.0
+    sensor, far, stamps = _corner_in_the_gap(3.0)
+    obs = sensor.update(_scan(far, stamps), turned)
+    assert obs[0].distance_m == pytest.approx(0.83, abs=1e-6)  # the point, not a wall
+    assert obs[0].bearing_rad == pytest.approx(math.radians(-11.25), abs=1e-6)
+    # Turned back, transducer 0's beam covers the point again and hears past it: gone.
+    stamps[0] = 0.6
+    obs = sensor.update(_scan(far, stamps), Odometry(0.0, 0.0, 0.0, 0.0, 0.6))
+    assert min(o.distance_m for o in obs) > 2.0
+
+
+def test_a_corner_kept_in_a_gap_is_let_go_after_gap_hold_s():
+    sensor, far, stamps = _corner_in_the_gap(1.0)
+    heading = math.radians(11.25)
+    for t in (0.4, 1.0):
+        stamps[0] = t
+        obs = sensor.update(_scan(far, stamps), Odometry(0.0, 0.0, heading, 0.0, t))
+        assert obs[0].distance_m == pytest.approx(0.83, abs=1e-6)
+    stamps[0] = 1.3  # the corner was heard at 0.2 s
+    obs = sensor.update(_scan(far, stamps), Odometry(0.0, 0.0, heading, 0.0, 1.3))
+    assert min(o.distance_m for o in obs) > 2.0

@@ -102,6 +102,16 @@ class SensingParams:
     bend_merge_rad: float = 0.0
     bend_ratio: float = 1.25
     hold_s: float = 1.5  # keep an echo through one silent firing of its transducer
+    # A convex corner answers only while it lies in some transducer's beam, and the beams,
+    # fanned from a ring 0.23 m off the centre, leave gaps between them that widen as the
+    # corner comes closer (1.5 m off, at one heading in seven no transducer hears it). So
+    # when a transducer's echo gives way to a farther one, its last echo is kept, as the
+    # point it was, for up to ``gap_hold_s`` while it lies in no transducer's beam that has
+    # fired since and heard past it (0: not kept). The robot homed onto three walls 1.7 m
+    # off with the cabinet's corner 0.27 m from its centre (fig13 seed 9).
+    gap_hold_s: float = 0.0
+    gap_jump_m: float = 0.3  # the new echo this much farther than the last one
+    gap_tol_m: float = 0.15  # a beam that heard this far past the point: it is not there
     # A neighbour's echo held back as a spike confirms nothing (False: it still does, as
     # before; TracerParams says why this and the tracer's switches are off by default).
     held_no_support: bool = False
@@ -112,11 +122,12 @@ class RingSensor:
 
     def __init__(self, params: SensingParams | None = None) -> None:
         self.p = params or SensingParams()
-        self.history = PoseHistory()
+        self.history = PoseHistory(max(3.0, self.p.gap_hold_s + 1.0))
         self._last_stamp: np.ndarray | None = None
         self._prev_dist: np.ndarray | None = None
         self._held: np.ndarray | None = None
         self._keep: tuple[np.ndarray, ...] | None = None
+        self._gap: np.ndarray | None = None  # kept echoes held because they lie in a gap
         self.points: np.ndarray | None = None  # the last update's echo points (robot frame)
 
     def update(self, scan: SonarScan, odo: Odometry) -> list[Obstacle]:
@@ -129,23 +140,65 @@ class RingSensor:
 
     def _held_echoes(self, scan: SonarScan) -> tuple[np.ndarray, ...]:
         """The latest echo of each transducer, kept through a silent firing for ``hold_s``:
-        a missed echo (a dropout) should not make a wall vanish for a whole second."""
+        a missed echo (a dropout) should not make a wall vanish for a whole second; and
+        through a farther echo for ``gap_hold_s`` while it lies in a gap between the beams."""
         fresh_echo = ~np.isnan(scan.ranges_m)
-        if self._keep is None or len(self._keep[0]) != len(scan):
+        n = len(scan)
+        if self._keep is None or len(self._keep[0]) != n:
             self._keep = tuple(
                 a.copy() for a in (scan.ranges_m, scan.x_m, scan.y_m, scan.yaw_rad, scan.stamps_s)
             )
+            self._gap = np.zeros(n, dtype=bool)
+        assert self._gap is not None
         r, x, y, yaw, t = self._keep
+        gap = self._in_gap(scan) if self.p.gap_hold_s > 0.0 else np.zeros(n, dtype=bool)
+        take = fresh_echo & ~gap
         for dst, src in zip(
             (r, x, y, yaw, t),
             (scan.ranges_m, scan.x_m, scan.y_m, scan.yaw_rad, scan.stamps_s),
             strict=True,
         ):
-            dst[fresh_echo] = src[fresh_echo]
-        stale = scan.stamps_s - t > self.p.hold_s
+            dst[take] = src[take]
+        self._gap = gap
+        stale = scan.stamps_s - t > np.where(gap, self.p.gap_hold_s, self.p.hold_s)
         r[stale] = np.nan
         t[stale] = scan.stamps_s[stale]
+        self._gap &= ~stale
         return r, x, y, yaw, t
+
+    def _in_gap(self, scan: SonarScan) -> np.ndarray:
+        """Which transducers' kept echoes stay although the transducer has fired since: an
+        echo given way to one ``gap_jump_m`` farther (or already held so), younger than
+        ``gap_hold_s``, whose point no beam fired since covers and heard past."""
+        assert self._keep is not None and self._gap is not None
+        r, x, y, yaw, t = self._keep
+        fired = scan.stamps_s > t
+        new = np.where(np.isnan(scan.ranges_m), np.inf, scan.ranges_m)
+        cand = np.isfinite(r) & (scan.stamps_s - t <= self.p.gap_hold_s)
+        cand &= self._gap | (fired & (new > r + self.p.gap_jump_m))
+        if not cand.any():
+            return cand
+        # The kept points in the odometry frame, then in each transducer's frame as it fired.
+        kept = self.history.at(t[cand])
+        ex = x[cand] + r[cand] * np.cos(yaw[cand])
+        ey = y[cand] + r[cand] * np.sin(yaw[cand])
+        c, s = np.cos(kept[:, 2]), np.sin(kept[:, 2])
+        wx = kept[:, 0] + c * ex - s * ey
+        wy = kept[:, 1] + s * ex + c * ey
+        now = self.history.at(scan.stamps_s)
+        cj, sj = np.cos(now[:, 2]), np.sin(now[:, 2])
+        dx = wx[:, None] - now[None, :, 0]
+        dy = wy[:, None] - now[None, :, 1]
+        px = cj[None, :] * dx + sj[None, :] * dy - scan.x_m[None, :]
+        py = -sj[None, :] * dx + cj[None, :] * dy - scan.y_m[None, :]
+        dist = np.hypot(px, py)
+        along = px * np.cos(scan.yaw_rad)[None, :] + py * np.sin(scan.yaw_rad)[None, :]
+        covers = (along >= math.cos(scan.half_beam_rad) * dist) & (dist <= scan.max_range_m)
+        after = scan.stamps_s[None, :] > t[cand][:, None]
+        past = new[None, :] > dist + self.p.gap_tol_m
+        out = np.zeros_like(cand)
+        out[np.flatnonzero(cand)] = ~(covers & after & past).any(axis=1)
+        return out
 
     def echo_points(self, scan: SonarScan) -> np.ndarray:
         """Echo points ``(n, 2)`` in the current robot frame, NaN where there is none."""
@@ -169,6 +222,10 @@ class RingSensor:
         ux, uy = np.cos(axis), np.sin(axis)
         dist = px * ux + py * uy
         pts = np.column_stack([dist * ux, dist * uy])
+        # A corner kept through a gap is the point it was, not a wall square to the beam.
+        assert self._gap is not None
+        pts[self._gap] = np.column_stack([px, py])[self._gap]
+        dist = np.where(self._gap, np.hypot(px, py), dist)
         fresh = (
             np.ones(n, dtype=bool)
             if self._last_stamp is None or len(self._last_stamp) != n

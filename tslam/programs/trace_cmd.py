@@ -49,14 +49,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 #: The tracer's switches, each off by default: the TracerParams fields each sets (a flag set
-#: True, or a distance that turns the behaviour on); ``held_no_support`` is SensingParams'.
+#: True, or a distance that turns the behaviour on); ``held_no_support`` and ``gap_hold``
+#: set SensingParams' (``sensing.`` fields).
 _SETS: dict[str, dict[str, bool | float]] = {
     "centred_meet": {"centred_meet": True},
     "course_sign": {"course_sign": True},
     "rejected_memory": {"rejected_memory": True},  # on by default since stop 34
     "sweep_fixed_frame": {"sweep_fixed_frame": True},
     "home_hold": {"home_hold_m": 0.15},
-    "held_no_support": {},
+    "held_no_support": {"sensing.held_no_support": True},
+    "gap_hold": {"sensing.gap_hold_s": 3.0},
     "place": {"place_radius_m": 0.4},  # on by default since stop 30; older commands still run
     "hold_on": {"home_hold_m": 0.6, "sweep_join_pieces": True, "sweep_shallow_bend": True},
     "coast": {"off_edge_coast_s": 1.0},
@@ -72,10 +74,10 @@ def tracer_params(switches: list[str]) -> TracerParams:
     unknown = sorted(set(switches) - set(SWITCHES))
     if unknown:
         raise UserError(f"no tracer switch {unknown[0]!r}; the switches: {', '.join(SWITCHES)}")
-    on = set(switches)
-    sensing = SensingParams(held_no_support="held_no_support" in on)
-    fields = {k: v for name in sorted(on) for k, v in _SETS[name].items()}
-    return TracerParams(sensing=sensing, **fields)
+    fields = {k: v for name in sorted(set(switches)) for k, v in _SETS[name].items()}
+    sensing = {k.removeprefix("sensing."): v for k, v in fields.items() if k.startswith("sensing.")}
+    tracer = {k: v for k, v in fields.items() if not k.startswith("sensing.")}
+    return TracerParams(sensing=SensingParams(**sensing), **tracer)
 
 
 def _run(args: argparse.Namespace) -> int:
