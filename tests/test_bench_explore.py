@@ -58,6 +58,7 @@ def _row(world="fig12", drift="paper", seed=1, **over):
         "ambiguous_nodes": 0,
         "path_over_gvg": 2.0,
         "max_odometry_error_m": 0.5,
+        "collisions": 0,
         "sim_time_s": 500.0,
         "wall_time_s": 2.0,
         "realtime_factor": 250.0,
@@ -254,7 +255,7 @@ def test_summary_per_method_and_drift():
     rows = [
         _row(drift="none", false_merges=0, path_over_gvg=1.0, realtime_factor=300.0),
         _row(drift="paper", seed=1, false_merges=2, missed_closures=1, complete=False,
-             path_over_gvg=3.0, realtime_factor=100.0,
+             path_over_gvg=3.0, realtime_factor=100.0, collisions=2,
              baseline={"false_merges": 3, "missed_revisits": 1, "revisits_recognised": 0}),
         _row(drift="paper", seed=2, path_over_gvg=2.0, realtime_factor=200.0,
              baseline={"false_merges": 1, "missed_revisits": 4, "revisits_recognised": 2}),
@@ -266,6 +267,7 @@ def test_summary_per_method_and_drift():
     assert paper["finished_wrong"] == 1 and s["tslam"]["none"]["finished_wrong"] == 0
     assert paper["false_merges"] == 2 and paper["runs_with_false_merges"] == 1
     assert paper["missed_closures"] == 1
+    assert paper["collisions"] == 2 and s["tslam"]["none"]["collisions"] == 0
     assert paper["path_over_gvg_median"] == 2.5 and paper["path_over_gvg_max"] == 3.0
     assert paper["realtime_factor_median"] == 150.0 and paper["realtime_factor_min"] == 100.0
     base = s["baseline"]["paper"]

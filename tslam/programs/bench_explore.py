@@ -61,6 +61,7 @@ TSLAM_FIELDS = (
     "ambiguous_nodes",
     "path_over_gvg",
     "max_odometry_error_m",
+    "collisions",
     "sim_time_s",
     "wall_time_s",
     "realtime_factor",
@@ -307,6 +308,9 @@ def _tslam_summary(rows: Sequence[Row]) -> dict[str, Any]:
         "runs_with_false_merges": sum(1 for r in ok if r["false_merges"] > 0),
         "missed_closures": sum(r["missed_closures"] for r in ok),
         "wrong_edges": sum(r["wrong_edges"] for r in ok),
+        # Contacts with a wall: a ring's blind spots (a corner between two beams, or nearer
+        # than a transducer reads) that the bumper, not the sonar, found.
+        "collisions": sum(r["collisions"] for r in ok),
         "path_over_gvg_median": _median(paths),
         "path_over_gvg_max": max(paths, default=None),
         "realtime_factor_median": _median(rts),
@@ -452,6 +456,7 @@ _RUN_COLUMNS: list[Column] = [
     ("loops", lambda r: f"{r['loop_closures_found']}/{r['loop_closures_true']}", False),
     ("wrong edges", lambda r: str(r["wrong_edges"]), False),
     ("path/GVG", lambda r: _fmt(r["path_over_gvg"], ".2f"), False),
+    ("contacts", lambda r: str(r["collisions"]), False),
     ("max odo err m", lambda r: _fmt(r["max_odometry_error_m"], ".3f"), False),
     ("RT factor", lambda r: _fmt(r["realtime_factor"], ".1f"), False),
 ]
@@ -473,6 +478,7 @@ _TSLAM_SUMMARY_COLUMNS: list[Column] = [
     *_FM_COLUMNS,
     ("missed closures", lambda s: str(s["missed_closures"]), False),
     ("wrong edges", lambda s: str(s["wrong_edges"]), False),
+    ("contacts", lambda s: str(s["collisions"]), False),
     ("path/GVG median", lambda s: _fmt(s["path_over_gvg_median"], ".2f"), False),
     ("path/GVG max", lambda s: _fmt(s["path_over_gvg_max"], ".2f"), False),
     ("RT median", lambda s: _fmt(s["realtime_factor_median"], ".1f"), False),
