@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from hal.interfaces import NOMAD200_LIMITS
-from hal.types import Odometry
+from hal.types import Odometry, Twist
 from tests.test_explorer_split import drive, meet
 from tslam.core.explorer import Explorer
 from tslam.core.tracer import BoundaryReached, MeetPointReached
@@ -194,3 +196,22 @@ def test_read_with_an_edge_fewer_at_another_junction_is_not_the_one_left():
     ex = Explorer(NOMAD200_LIMITS)
     node, _ = ex._arrive(back_from_the_place_s_dead_end(ex, (0.6, 0.0)))
     assert node != 1 and ex.notes[-1].text.startswith("lost (expected node 1")
+
+
+def test_a_departure_read_merged_with_another_is_left_by_its_own_bearing():
+    """Back at the place read with three edges, its 2-deg port shares the 333-deg departure
+    with the 293-deg one (the dead end just mapped): the robot leaves by 2 deg turned as the
+    two ports read apart both times have turned (75 to 72, 186 to 191: 1 deg), not by 333."""
+    ex = Explorer(NOMAD200_LIMITS)
+    ev = back_from_the_place_s_dead_end(ex, (0.0, 0.02))
+    assert ex.port_bearings[1] == tuple(math.radians(b) for b in (2, 75, 186, 293))
+    k = ex._choose(ev)
+    assert ex.leaving == (1, 0) and k == 2
+    assert math.degrees(ex._depart_along) == pytest.approx(3.0, abs=0.05)
+    assert ex.notes[-1].text == "node 1: departure 0 read merged with another; left by its own"
+    # The tracer set off by the reading's departure; the explorer's next step turns it.
+    departed: list[float] = []
+    ex.tracer.step = lambda *_: (Twist(), [])
+    ex.tracer.depart = lambda rad, odo: departed.append(math.degrees(rad))
+    ex.step(None, ex._odo, None, 1.0)
+    assert departed == [pytest.approx(3.0, abs=0.05)] and ex._depart_along is None

@@ -308,6 +308,11 @@ class Explorer:
         # Meet node -> how far apart two of its place's points were read (``_spans``).
         self.span: dict[int, float] = {}
         self._last_visit: tuple[int, tuple[float, ...], PortMap, float, float] | None = None
+        # Meet node -> each port's bearing (odometry frame) when it was last read with every
+        # edge apart; and the bearing to leave by in place of a reading's departure that two
+        # ports share (``_departure_bearing``).
+        self.port_bearings: dict[int, tuple[float, ...]] = {}
+        self._depart_along: float | None = None
         self._now = 0.0
         self._odo: Odometry | None = None
         self.paths = EdgePaths()
@@ -346,6 +351,9 @@ class Explorer:
         if self.held:
             return Twist(), []
         twist, events = self.tracer.step(scan, odo, status, now_s)
+        if self._depart_along is not None:
+            self.tracer.depart(self._depart_along, odo)
+            self._depart_along = None
         self._watch_detour(odo)
         if self.leaving is not None:
             self.paths.add(odo)
@@ -400,7 +408,28 @@ class Explorer:
             return
         self.held = self.done = False
         self._leave(node, port)
-        self.tracer.depart(ev.departures_rad[pm.index[port]], self._odo)
+        along = self._departure_bearing(ev, node, pm, port)
+        self.tracer.depart(ev.departures_rad[pm.index[port]] if along is None else along, self._odo)
+
+    def _departure_bearing(
+        self, ev: MeetPointReached, node: int, pm: PortMap, port: int
+    ) -> float | None:
+        """Where to leave by for ``port`` when this reading merged it with another port (two
+        edges seen as one departure between them, fig16's indent from the corridor's meet
+        point): its bearing when the node was last read with every edge apart, turned as the
+        ports read apart both times have turned since. None to leave by the reading's."""
+        k, old = pm.index[port], self.port_bearings.get(node)
+        if pm.index.count(k) < 2 or old is None or len(old) != len(pm.index):
+            return None
+        alone = [p for p, i in enumerate(pm.index) if pm.index.count(i) == 1]
+        if not alone:
+            return None
+        turn = math.atan2(
+            sum(math.sin(ev.departures_rad[pm.index[p]] - old[p]) for p in alone),
+            sum(math.cos(ev.departures_rad[pm.index[p]] - old[p]) for p in alone),
+        )
+        self._note(f"node {node}: departure {port} read merged with another; left by its own")
+        return (old[port] + turn) % TAU
 
     def _hold(self, node: int) -> None:
         self.held = True
@@ -474,6 +503,7 @@ class Explorer:
             self._hold(node)
             return ev.arrival_index or 0
         self._leave(node, port)
+        self._depart_along = self._departure_bearing(ev, node, pm, port)
         return pm.index[port]
 
     def _leave(self, node: int, port: int) -> None:
@@ -1596,6 +1626,8 @@ class Explorer:
             pm = pm.renamed(shift)
         self.here = node
         self._last_visit = (node, ev.departures_rad, pm, ev.x_m, ev.y_m)
+        if len(set(pm.index)) == len(pm.index) == ev.degree:
+            self.port_bearings[node] = tuple(ev.departures_rad[i] for i in pm.index)
         self._at = (ev, node, pm)
         return node, pm
 
@@ -1801,6 +1833,13 @@ class Explorer:
         if self.goal in renamed:
             self.goal = renamed[self.goal][0]
         self.plan = []
+        for n, (r, shift) in renamed.items():
+            old = self.port_bearings.pop(n, None)
+            if old is not None and r not in self.port_bearings:
+                turned = [0.0] * len(old)
+                for p, b in enumerate(old):
+                    turned[(p + shift) % len(old)] = b
+                self.port_bearings[r] = tuple(turned)
 
     def _next_port(self, node: int, arrival: int | None) -> int | None:
         on_by, self._on_by = self._on_by, None
