@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 
 from hal.registry import create_backend
-from hal.types import Twist
+from hal.types import SonarScan, Twist
 from sim_backend.backend import SimBackend
 from sim_backend.builtin_worlds import builtin_world
 from sim_backend.ground_truth import compute_gvg
 from sim_backend.world import PolygonWorld, StartPose
 from tslam.core.sweep import WIDE_BEND_MERGE_RAD, Sweep, sweep_minima
 from tslam.core.tracer import MeetPointReached, Tracer
-from tslam.programs.trace_cmd import tracer_params
+from tslam.programs.trace_cmd import run_trace, tracer_params
 
 
 def _ring(step_deg: float = 5.0) -> np.ndarray:
@@ -449,3 +449,35 @@ def test_the_middle_face_of_a_concave_bend_is_no_recess():
     # A view past the cut on one side, into an inner corner behind it: a recess.
     d[(deg > 135) & (deg <= 142)] = 1.70
     assert len(sweep_minima(b, d, recess=True)) == 3
+
+
+def test_a_sweep_counts_the_firings_that_read_the_minimum_range():
+    def scan(ranges: list[float], stamp: float) -> SonarScan:
+        yaw = np.arange(4) * math.pi / 2
+        return SonarScan(
+            ranges_m=np.asarray(ranges),
+            x_m=0.23 * np.cos(yaw),
+            y_m=0.23 * np.sin(yaw),
+            yaw_rad=yaw,
+            stamps_s=np.full(4, stamp),
+            min_range_m=0.15,
+            max_range_m=6.5,
+            half_beam_rad=math.radians(12.5),
+        )
+
+    sweep = Sweep()
+    sweep.add(scan([1.0, 0.15, np.nan, 0.3], 0.0))
+    sweep.add(scan([1.0, 0.15, np.nan, 0.3], 0.0))  # the same firings again: not new
+    assert sweep.touching == 1
+    sweep.add(scan([0.155, 0.17, 2.0, 0.3], 1.0))
+    assert sweep.touching == 2  # 0.155 is within a centimetre of it, 0.17 is not
+
+
+def test_no_meet_point_beside_something_too_near_to_measure():
+    """fig13 seed 9 at drift paper: the robot homed 0.27 m from a cabinet's convex corner, which
+    no transducer heard but at the minimum range, and reported a meet point of three walls
+    1.7 m off, 0.99 m from any true one."""
+    backend = create_backend({"backend": "sim", "world": "fig13", "seed": 9, "drift": "paper"})
+    report = run_trace(backend, 12).report
+    assert report["meet_point_error_max_m"] <= 0.10
+    assert report["collisions"] == 0

@@ -71,6 +71,10 @@ DENSE_READINGS = 256
 DENSE_BINS = 128
 
 
+#: A reading this close to the transducer's minimum range is one it could not measure.
+TOUCH_M = 0.01
+
+
 class Sweep:
     """Collects the firings of a standing robot while its turret turns."""
 
@@ -79,6 +83,10 @@ class Sweep:
         self._last: np.ndarray | None = None
         self._bearing: list[float] = []
         self._dist: list[float] = []
+        # Firings that read the transducer's minimum range: something nearer than it can
+        # measure. A convex corner that close answers too few of a sweep's firings to count
+        # as an obstacle, but it is there.
+        self.touching = 0
 
     def add(self, scan: SonarScan, heading_rad: np.ndarray | float = 0.0) -> None:
         """Take the firings of ``scan`` not seen before. ``heading_rad``: the body's
@@ -96,6 +104,7 @@ class Sweep:
         ex = scan.x_m + np.where(np.isfinite(r), r, 0.0) * np.cos(scan.yaw_rad)
         ey = scan.y_m + np.where(np.isfinite(r), r, 0.0) * np.sin(scan.yaw_rad)
         bearing = scan.yaw_rad + heading_rad
+        self.touching += int(np.count_nonzero(new & (r <= scan.min_range_m + TOUCH_M)))
         for i in np.flatnonzero(new):
             self._bearing.append(float(bearing[i]))
             self._dist.append(float(math.hypot(ex[i], ey[i])) if math.isfinite(r[i]) else math.inf)

@@ -586,6 +586,7 @@ class Tracer:
         s.swept_again = False
         s.settle_tries += 1
         fast_ring = s.sweep.firings_per_transducer / turns > p.fast_ring_firings
+        touching = s.sweep.touching
         s.sweep = None
         centre = laws.wall_centre if centred else laws.circumcentre
         swept = centre(*obs[:3]) if len(obs) >= 3 else None
@@ -602,7 +603,11 @@ class Tracer:
             at = laws.seen_from(obs, swept)
             order = sorted(range(len(obs)), key=lambda i: at[i])
             obs = [replace(obs[i], distance_m=at[i]) for i in order]
-        if swept is None or not laws.equidistant(obs, 3, p.meet_spread_m):
+        # Something within the ring's minimum range, which the sweep's obstacles leave out
+        # (too few firings hear it): the walls the point is equidistant to are not the
+        # nearest. fig13 seed 9 homed onto three walls 1.7 m off with a cabinet's corner
+        # 0.27 m from its centre, and reported that as a meet point 0.99 m from any.
+        if swept is None or touching or not laws.equidistant(obs, 3, p.meet_spread_m):
             # Three obstacles came close to equidistant but never met: the edge goes on.
             s.behaviour = Behaviour.TRACE
             s.armed = False
