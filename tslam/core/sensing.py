@@ -107,8 +107,8 @@ class SensingParams:
     # corner comes closer (1.5 m off, at one heading in seven no transducer hears it). So
     # when a transducer's echo gives way to a farther one, its last echo is kept, as the
     # point it was, for up to ``gap_hold_s`` while it lies in no transducer's beam that has
-    # fired since and heard past it (0: not kept). The robot homed onto three walls 1.7 m
-    # off with the cabinet's corner 0.27 m from its centre (fig13 seed 9).
+    # fired since and heard past it (0: not kept). fig13 seed 9: the robot walked to 0.27 m
+    # of a cabinet's corner the ring had heard and lost, and homed onto three walls 1.7 m off.
     gap_hold_s: float = 0.0
     gap_jump_m: float = 0.3  # the new echo this much farther than the last one
     gap_tol_m: float = 0.15  # a beam that heard this far past the point: it is not there
