@@ -3,11 +3,14 @@ drove into it was zeroed (fig13 seed 1 stood for 20 minutes backing into a wall 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+import pytest
 
 from hal.interfaces import NOMAD200_LIMITS
 from hal.types import DriveStatus, Odometry, SonarScan
-from tslam.core.tracer import Behaviour, Tracer
+from tslam.core.tracer import Behaviour, Tracer, TracerParams
 
 CLEAR = DriveStatus(bumper=False, stall=False, motors_on=True, stamp_s=0.0)
 PRESSED = DriveStatus(bumper=True, stall=True, motors_on=True, stamp_s=0.0)
@@ -41,3 +44,23 @@ def test_backing_into_something_is_escaped_forwards():
     tracer.step(silent_scan(now), odo, PRESSED, now)
     out, _ = tracer.step(silent_scan(now), odo, PRESSED, now)
     assert tracer.s.behaviour is Behaviour.BACKOFF and out.v_mps > 0.0
+
+
+def test_a_contact_is_kept_as_an_obstacle_ahead_for_contact_hold_s():
+    """The ring heard nothing (a convex corner in a gap between beams, fig15's boxes): the
+    contact puts a point obstacle 0.25 m ahead of the centre, which stays where it was as the
+    robot backs off, and goes after ``contact_hold_s``."""
+    tracer = Tracer(NOMAD200_LIMITS, TracerParams(contact_hold_s=60.0))
+    tracer.step(silent_scan(0.0), Odometry(1.0, 2.0, math.pi / 2, 0.0, 0.0), PRESSED, 0.0)
+    assert [(o.x_m, o.y_m) for o in tracer.obstacles] == []  # seen from the next step on
+    backed = Odometry(1.0, 1.8, math.pi / 2, 0.0, 1.0)  # 0.2 m back, facing +y
+    tracer.step(silent_scan(1.0), backed, CLEAR, 1.0)
+    (o,) = tracer.obstacles
+    assert (o.distance_m, o.x_m, o.y_m) == pytest.approx((0.45, 0.45, 0.0))
+    assert (o.gx, o.gy) == pytest.approx((-1.0, 0.0))
+    tracer.step(silent_scan(61.0), backed, CLEAR, 61.0)
+    assert tracer.obstacles == []
+    off = Tracer(NOMAD200_LIMITS)  # contact_hold_s 0: nothing kept
+    off.step(silent_scan(0.0), Odometry(1.0, 2.0, math.pi / 2, 0.0, 0.0), PRESSED, 0.0)
+    off.step(silent_scan(1.0), backed, CLEAR, 1.0)
+    assert off.obstacles == []

@@ -179,6 +179,11 @@ class TracerParams:
     left_meet_travel_m: float = 2.0  # ... unless the robot has travelled this far since
     approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
     approach_look_m: float = 0.5  # the arrival direction: from where the robot was this far back
+    # A contact is an obstacle the ring did not hear (a convex corner in the gap between two
+    # beams, which driving straight at it keeps there): it is kept, as a point this far
+    # ahead of the centre along the way the base was driving, for this long (0: not kept).
+    contact_hold_s: float = 0.0
+    contact_ahead_m: float = 0.25
     backoff_m: float = 0.25  # reverse this far from a contact before re-accessing ...
     backoff_mps: float = 0.1  # ... at this speed, for at most four times as long as it takes
 
@@ -272,6 +277,7 @@ class _State:
     # Which way the base last translated: a contact that stops the robot zeroes the command,
     # and the way out is away from where it was going, not always backwards.
     last_v_sign: float = 1.0
+    contacts: list[tuple[float, float, float]] = field(default_factory=list)  # x, y, when
 
 
 class Tracer:
@@ -299,11 +305,20 @@ class Tracer:
     def step(
         self, scan: SonarScan, odo: Odometry, status: DriveStatus, now_s: float
     ) -> tuple[Twist, list[Event]]:
-        obs = self.sensor.update(scan, odo)
+        obs = self._with_contacts(self.sensor.update(scan, odo), odo, now_s)
         self.obstacles = obs
         self._scan = scan
         events: list[Event] = []
         if (status.bumper or status.stall) and self.s.behaviour is not Behaviour.BACKOFF:
+            if self.p.contact_hold_s > 0.0:
+                ahead = self.p.contact_ahead_m * self.s.last_v_sign
+                self.s.contacts.append(
+                    (
+                        odo.x_m + ahead * math.cos(odo.heading_rad),
+                        odo.y_m + ahead * math.sin(odo.heading_rad),
+                        now_s,
+                    )
+                )
             # Touching something means the laws were fed a lie: what the robot touches is
             # inside the sonar's minimum range, invisible to the ring. Back away the way it
             # came (the base drove into it), then re-access.
@@ -322,6 +337,22 @@ class Tracer:
         if twist.v_mps != 0.0:
             self.s.last_v_sign = math.copysign(1.0, twist.v_mps)
         return twist, events
+
+    def _with_contacts(self, obs: list[Obstacle], odo: Odometry, now: float) -> list[Obstacle]:
+        """``obs`` and the contacts of the last ``contact_hold_s``, nearest first."""
+        s = self.s
+        s.contacts = [c for c in s.contacts if now - c[2] <= self.p.contact_hold_s]
+        if not s.contacts:
+            return obs
+        c, sn = math.cos(odo.heading_rad), math.sin(odo.heading_rad)
+        out = list(obs)
+        for x, y, _ in s.contacts:
+            dx, dy = x - odo.x_m, y - odo.y_m
+            px, py = c * dx + sn * dy, -sn * dx + c * dy
+            d = math.hypot(px, py)
+            if d > 1e-6:
+                out.append(Obstacle(d, px, py, -px / d, -py / d, math.atan2(py, px)))
+        return sorted(out, key=lambda o: o.distance_m)
 
     # ------------------------------------------------------------------ behaviours
     def _law(

@@ -65,6 +65,7 @@ _SETS: dict[str, dict[str, bool | float]] = {
     "keep": {"home_keep_m": 0.1},
     "vertex": {"sweep_vertex": True},
     "recess": {"sweep_recess": True, "place_corners": True},  # on by default since stop 36
+    "contact_memory": {"contact_hold_s": 60.0},
 }
 SWITCHES = tuple(_SETS)
 
