@@ -26,7 +26,8 @@ def silent_scan(now: float) -> SonarScan:
 
 
 def test_backing_into_something_is_escaped_forwards():
-    tracer = Tracer(NOMAD200_LIMITS)
+    # Contacts kept as obstacles would have the robot leave the first one behind it.
+    tracer = Tracer(NOMAD200_LIMITS, TracerParams(contact_hold_s=0.0))
     odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0)
     now = 0.0
     tracer.step(silent_scan(now), odo, PRESSED, now)  # touched while driving forwards ...
@@ -60,7 +61,7 @@ def test_a_contact_is_kept_as_an_obstacle_ahead_for_contact_hold_s():
     assert (o.gx, o.gy) == pytest.approx((-1.0, 0.0))
     tracer.step(silent_scan(61.0), backed, CLEAR, 61.0)
     assert tracer.obstacles == []
-    off = Tracer(NOMAD200_LIMITS)  # contact_hold_s 0: nothing kept
+    off = Tracer(NOMAD200_LIMITS, TracerParams(contact_hold_s=0.0))  # nothing kept
     off.step(silent_scan(0.0), Odometry(1.0, 2.0, math.pi / 2, 0.0, 0.0), PRESSED, 0.0)
     off.step(silent_scan(1.0), backed, CLEAR, 1.0)
     assert off.obstacles == []
