@@ -23,7 +23,7 @@ from tslam.core import laws
 from tslam.core.edgelength import EdgeOdometer
 from tslam.core.place import place_obstacles
 from tslam.core.sensing import Obstacle, RingSensor, SensingParams
-from tslam.core.sweep import BENT_WALL_MERGE_RAD, WIDE_BEND_MERGE_RAD, Sweep
+from tslam.core.sweep import BENT_WALL_MERGE_RAD, TOUCH_M, WIDE_BEND_MERGE_RAD, Sweep
 
 TAU = 2.0 * math.pi
 
@@ -311,14 +311,7 @@ class Tracer:
         events: list[Event] = []
         if (status.bumper or status.stall) and self.s.behaviour is not Behaviour.BACKOFF:
             if self.p.contact_hold_s > 0.0:
-                ahead = self.p.contact_ahead_m * self.s.last_v_sign
-                self.s.contacts.append(
-                    (
-                        odo.x_m + ahead * math.cos(odo.heading_rad),
-                        odo.y_m + ahead * math.sin(odo.heading_rad),
-                        now_s,
-                    )
-                )
+                self.s.contacts.append((*self._contact_point(scan, odo), now_s))
             # Touching something means the laws were fed a lie: what the robot touches is
             # inside the sonar's minimum range, invisible to the ring. Back away the way it
             # came (the base drove into it), then re-access.
@@ -337,6 +330,22 @@ class Tracer:
         if twist.v_mps != 0.0:
             self.s.last_v_sign = math.copysign(1.0, twist.v_mps)
         return twist, events
+
+    def _contact_point(self, scan: SonarScan, odo: Odometry) -> tuple[float, float]:
+        """Where the base touched something (odometry frame): the echo of a transducer at its
+        minimum range, the one nearest the way the base was driving; else ``contact_ahead_m``
+        along that way (the bumper says that, not where)."""
+        way = 0.0 if self.s.last_v_sign > 0 else math.pi
+        near = np.flatnonzero(scan.ranges_m <= scan.min_range_m + TOUCH_M)
+        if len(near):
+            i = min(near, key=lambda k: abs(_angdiff(float(scan.yaw_rad[k]), way)))
+            r = float(scan.ranges_m[i])
+            px = float(scan.x_m[i]) + r * math.cos(float(scan.yaw_rad[i]))
+            py = float(scan.y_m[i]) + r * math.sin(float(scan.yaw_rad[i]))
+        else:
+            px, py = self.p.contact_ahead_m * math.cos(way), 0.0
+        c, sn = math.cos(odo.heading_rad), math.sin(odo.heading_rad)
+        return odo.x_m + c * px - sn * py, odo.y_m + sn * px + c * py
 
     def _with_contacts(self, obs: list[Obstacle], odo: Odometry, now: float) -> list[Obstacle]:
         """``obs`` and the contacts of the last ``contact_hold_s``, nearest first."""
