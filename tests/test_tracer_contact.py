@@ -65,3 +65,15 @@ def test_a_contact_is_kept_as_an_obstacle_ahead_for_contact_hold_s():
     off.step(silent_scan(0.0), Odometry(1.0, 2.0, math.pi / 2, 0.0, 0.0), PRESSED, 0.0)
     off.step(silent_scan(1.0), backed, CLEAR, 1.0)
     assert off.obstacles == []
+
+
+def test_a_contact_is_kept_where_a_transducer_read_its_minimum_range():
+    """Touching a wall on its left while driving along it (fig13 seed 5 wedged itself between
+    the wall and a contact kept ahead of it, 366 times): the transducer facing the wall reads
+    its minimum range, and the contact is kept there, not ahead."""
+    tracer = Tracer(NOMAD200_LIMITS, TracerParams(contact_hold_s=60.0))
+    scan = silent_scan(0.0)
+    scan.ranges_m[4] = 0.15  # the transducer at 90 degrees, 0.2 m off the centre
+    tracer.step(scan, Odometry(1.0, 2.0, 0.0, 0.0, 0.0), PRESSED, 0.0)
+    ((x, y, _),) = tracer.s.contacts
+    assert (x, y) == pytest.approx((1.0, 2.35))
