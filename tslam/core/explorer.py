@@ -1836,10 +1836,8 @@ class Explorer:
         for n, (r, shift) in renamed.items():
             old = self.port_bearings.pop(n, None)
             if old is not None and r not in self.port_bearings:
-                turned = [0.0] * len(old)
-                for p, b in enumerate(old):
-                    turned[(p + shift) % len(old)] = b
-                self.port_bearings[r] = tuple(turned)
+                n_ports = len(old)
+                self.port_bearings[r] = tuple(old[(p - shift) % n_ports] for p in range(n_ports))
 
     def _next_port(self, node: int, arrival: int | None) -> int | None:
         on_by, self._on_by = self._on_by, None

@@ -179,12 +179,7 @@ class RingSensor:
         if not cand.any():
             return cand
         # The kept points in the odometry frame, then in each transducer's frame as it fired.
-        kept = self.history.at(t[cand])
-        ex = x[cand] + r[cand] * np.cos(yaw[cand])
-        ey = y[cand] + r[cand] * np.sin(yaw[cand])
-        c, s = np.cos(kept[:, 2]), np.sin(kept[:, 2])
-        wx = kept[:, 0] + c * ex - s * ey
-        wy = kept[:, 1] + s * ex + c * ey
+        wx, wy = _in_odometry(r[cand], x[cand], y[cand], yaw[cand], self.history.at(t[cand]))
         now = self.history.at(scan.stamps_s)
         cj, sj = np.cos(now[:, 2]), np.sin(now[:, 2])
         dx = wx[:, None] - now[None, :, 0]
@@ -206,12 +201,7 @@ class RingSensor:
         r, sx, sy, syaw, stamps = self._held_echoes(scan)
         poses = self.history.at(stamps)
         x0, y0, th0 = self.history.latest()
-        # Echo in the robot frame at firing time, on the transducer's axis.
-        ex = sx + r * np.cos(syaw)
-        ey = sy + r * np.sin(syaw)
-        c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-        wx = poses[:, 0] + c * ex - s * ey
-        wy = poses[:, 1] + s * ex + c * ey
+        wx, wy = _in_odometry(r, sx, sy, syaw, poses)
         c0, s0 = math.cos(th0), math.sin(th0)
         dx, dy = wx - x0, wy - y0
         px, py = c0 * dx + s0 * dy, -s0 * dx + c0 * dy
@@ -258,6 +248,17 @@ class RingSensor:
         self._last_stamp = stamps.copy()
         pts[self._held] = np.nan
         return pts
+
+
+def _in_odometry(
+    r: np.ndarray, x: np.ndarray, y: np.ndarray, yaw: np.ndarray, poses: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Echo points in the odometry frame: each on its transducer's axis (robot frame at
+    firing time: ``x``, ``y``, ``yaw``), ``r`` along it, from the pose it fired at."""
+    ex = x + r * np.cos(yaw)
+    ey = y + r * np.sin(yaw)
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    return poses[:, 0] + c * ex - s * ey, poses[:, 1] + s * ex + c * ey
 
 
 def local_minima(

@@ -344,8 +344,7 @@ class Tracer:
             py = float(scan.y_m[i]) + r * math.sin(float(scan.yaw_rad[i]))
         else:
             px, py = self.p.contact_ahead_m * math.cos(way), 0.0
-        c, sn = math.cos(odo.heading_rad), math.sin(odo.heading_rad)
-        return odo.x_m + c * px - sn * py, odo.y_m + sn * px + c * py
+        return _add(_to_odom((px, py), odo), odo)
 
     def _with_contacts(self, obs: list[Obstacle], odo: Odometry, now: float) -> list[Obstacle]:
         """``obs`` and the contacts of the last ``contact_hold_s``, nearest first."""
@@ -353,11 +352,9 @@ class Tracer:
         s.contacts = [c for c in s.contacts if now - c[2] <= self.p.contact_hold_s]
         if not s.contacts:
             return obs
-        c, sn = math.cos(odo.heading_rad), math.sin(odo.heading_rad)
         out = list(obs)
         for x, y, _ in s.contacts:
-            dx, dy = x - odo.x_m, y - odo.y_m
-            px, py = c * dx + sn * dy, -sn * dx + c * dy
+            px, py = _to_robot((x - odo.x_m, y - odo.y_m), odo)
             d = math.hypot(px, py)
             if d > 1e-6:
                 out.append(Obstacle(d, px, py, -px / d, -py / d, math.atan2(py, px)))
