@@ -77,3 +77,44 @@ def test_a_contact_is_kept_where_a_transducer_read_its_minimum_range():
     tracer.step(scan, Odometry(1.0, 2.0, 0.0, 0.0, 0.0), PRESSED, 0.0)
     ((x, y, _),) = tracer.s.contacts
     assert (x, y) == pytest.approx((1.0, 2.35))
+
+
+def touching_scan(now: float, *bearings_deg: float) -> SonarScan:
+    """A silent ring but for the transducers at ``bearings_deg``, which read their minimum
+    range: something nearer than they can measure."""
+    scan = silent_scan(now)
+    for b in bearings_deg:
+        scan.ranges_m[round(b / 22.5) % 16] = scan.min_range_m
+    return scan
+
+
+def test_backing_off_pressed_into_a_corner_steers_away_from_both_walls():
+    """fig12 seed 1, drift severe: pinned in the top-left corner, the robot backed into one
+    wall and drove into the other for hours, the wheels a degree into the first."""
+    tracer = Tracer(NOMAD200_LIMITS, TracerParams(contact_hold_s=0.0))
+    odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0)
+    tracer.step(touching_scan(0.0, 0.0), odo, PRESSED, 0.0)  # drove into the wall ahead ...
+    back, _ = tracer.step(touching_scan(0.1, 0.0), odo, CLEAR, 0.1)
+    assert tracer.s.behaviour is Behaviour.BACKOFF and back.v_mps < 0.0 and back.steer_radps == 0
+    # ... and backing off straight is stopped too: walls at 90 and 157.5 degrees touch.
+    turn, _ = tracer.step(touching_scan(0.2, 90.0, 157.5), odo, PRESSED, 0.2)
+    assert tracer.s.behaviour is Behaviour.BACKOFF
+    assert turn.steer_radps < 0.0 and turn.v_mps == 0.0  # wheels turn toward -56 degrees first
+    way = math.atan2(-(1.0 + math.sin(math.radians(157.5))), -math.cos(math.radians(157.5)))
+    turned = Odometry(0.0, 0.0, way, 0.0, 0.3)
+    out, _ = tracer.step(touching_scan(0.3), turned, CLEAR, 0.3)
+    assert out.v_mps > 0.0 and abs(out.steer_radps) < 1e-6
+    # Out by ``backoff_m`` along the way away, it accesses the graph again.
+    d = tracer.p.backoff_m
+    away = Odometry(d * math.cos(way), d * math.sin(way), way, 0.0, 1.0)
+    tracer.step(silent_scan(4.0), away, CLEAR, 4.0)
+    assert tracer.s.behaviour is Behaviour.ACCESS
+
+
+def test_a_stall_backing_off_with_nothing_at_minimum_range_keeps_backing_straight():
+    tracer = Tracer(NOMAD200_LIMITS, TracerParams(contact_hold_s=0.0))
+    odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0)
+    tracer.step(silent_scan(0.0), odo, PRESSED, 0.0)
+    tracer.step(silent_scan(0.1), odo, CLEAR, 0.1)
+    again, _ = tracer.step(silent_scan(0.2), odo, PRESSED, 0.2)
+    assert tracer.s.escape is None and again.v_mps < 0.0 and again.steer_radps == 0.0

@@ -243,6 +243,7 @@ class _State:
     home_seen: float = 0.0  # when the ring last gave that estimate
     depart_dir: float = 0.0
     depart_from: tuple[float, float] = (0.0, 0.0)
+    escape: tuple[float, float] | None = None  # backing off pressed: away from it (odometry)
     depart_m: float = 0.0
     # Control cycles the departure's two obstacles have straddled it, once they did not at
     # first (-1: not looked yet).
@@ -319,6 +320,14 @@ class Tracer:
             self.s.since = now_s
             self.s.depart_from = (odo.x_m, odo.y_m)
             self.s.depart_dir = -self.s.last_v_sign
+            self.s.escape = None
+        elif status.stall and self.s.behaviour is Behaviour.BACKOFF:
+            # Backing off straight pressed into something too: in a corner, against one wall
+            # with the wheels turned a degree into it, the base moves neither way, and
+            # reversing each time it stalled wedged fig12's robot there for hours.
+            away = _away_from_touch(scan)
+            if away is not None:
+                self.s.escape = _to_odom(away, odo)
         v = self._law(obs, odo, now_s, events)
         if v is None:
             twist = Twist(0.0, 0.0, 0.0)
@@ -391,6 +400,10 @@ class Tracer:
             if gone >= p.backoff_m or now - s.since > 4.0 * p.backoff_m / p.backoff_mps:
                 s.behaviour = Behaviour.ACCESS
                 return None
+            if s.escape is not None:
+                ex, ey = _to_robot(s.escape, odo)
+                v = (p.backoff_mps * ex, p.backoff_mps * ey)
+                return laws.to_twist(v, self.limits, reverse_ok=True)
             return Twist(p.backoff_mps * s.depart_dir, 0.0, 0.0)
         if b is Behaviour.TRACE:
             return self._trace(obs, odo, now, events)
@@ -821,6 +834,18 @@ def _add(v: tuple[float, float], odo: Odometry) -> tuple[float, float]:
 def _to_robot(t: tuple[float, float], odo: Odometry) -> tuple[float, float]:
     c, s = math.cos(odo.heading_rad), math.sin(odo.heading_rad)
     return c * t[0] + s * t[1], -s * t[0] + c * t[1]
+
+
+def _away_from_touch(scan: SonarScan) -> tuple[float, float] | None:
+    """The unit vector (robot frame) away from every transducer that reads its minimum
+    range (something nearer than it can measure), or None if none does or they cancel."""
+    near = scan.ranges_m <= scan.min_range_m + TOUCH_M
+    if not near.any():
+        return None
+    x = -float(np.sum(np.cos(scan.yaw_rad[near])))
+    y = -float(np.sum(np.sin(scan.yaw_rad[near])))
+    norm = math.hypot(x, y)
+    return (x / norm, y / norm) if norm > 1e-6 else None
 
 
 def _angdiff(a: float, b: float) -> float:
