@@ -141,14 +141,14 @@ def test_a_row_equals_the_report_of_the_same_run_in_process(capsys, tmp_path):
 
 
 def test_a_tracer_switch_reaches_the_workers_and_the_result(capsys):
-    code = main(["bench", "explore", "--json", *TINY, "--jobs", "1", "--switch", "centred_meet"])
+    code = main(["bench", "explore", "--json", *TINY, "--jobs", "1", "--switch", "course_sign"])
     out, err = capsys.readouterr()
     assert code == 0, err
     result = json.loads(out)
-    assert result["tracer_switches_on"] == ["centred_meet"]
+    assert result["tracer_switches_on"] == ["course_sign"]
     [row] = result["runs"]
-    task = Task("fig12", "none", 1, 120.0, ("centred_meet",))
-    params = tracer_params(["centred_meet"])
+    task = Task("fig12", "none", 1, 120.0, ("course_sign",))
+    params = tracer_params(["course_sign"])
     run = explore("fig12", 1, "none", 120.0, progress=False, tracer_params=params)
     here = row_from_report(task, report(run, "fig12", 1, "none"))
     moves = ("path_over_gvg", "max_odometry_error_m")

@@ -5,6 +5,7 @@ copies multiply (``Explorer._lead_ins``, ``Explorer._fold_implied``)."""
 from __future__ import annotations
 
 from hal.interfaces import NOMAD200_LIMITS
+from tests.tracer_paths import GIVING_UP
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Tolerances, candidates
 from tslam.core.topomap import TopoMap
@@ -17,12 +18,13 @@ def test_fig12_seed_5_recognises_the_copy_and_completes():
     # 7's neighbour 5, with node 2 as node 7. Before, that run made 249 duplicate nodes in
     # its 4 hours and never finished. It runs with ``blip_m`` 0, as then: with the default
     # (stop 29) the blip off the edge on the way leaves its length whole, the pass through
-    # node 7 is placed by dead reckoning, and the run is never lost there.
+    # node 7 is placed by dead reckoning, and the run is never lost there. And with the
+    # tracer of then, homing giving up on a lost third echo (``hold_on`` off; on since stop 37).
     runs = {}
     for lead_ins in (True, False):
         params = ExplorerParams(lead_ins=lead_ins, blip_m=0.0)
         runs[lead_ins] = explore("fig12", 5, "paper", duration_s=1500.0, progress=False,
-                                 params=params)  # fmt: skip
+                                 params=params, tracer_params=GIVING_UP)  # fmt: skip
     run = runs[True]
     rep = report(run, "fig12", 5, "paper")
     assert rep["complete"] and rep["false_merges"] == 0

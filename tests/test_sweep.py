@@ -14,9 +14,10 @@ from sim_backend.backend import SimBackend
 from sim_backend.builtin_worlds import builtin_world
 from sim_backend.ground_truth import compute_gvg
 from sim_backend.world import PolygonWorld, StartPose
+from tests.tracer_paths import GIVING_UP
 from tslam.core.sweep import WIDE_BEND_MERGE_RAD, Sweep, sweep_minima
-from tslam.core.tracer import MeetPointReached, Tracer
-from tslam.programs.trace_cmd import run_trace, tracer_params
+from tslam.core.tracer import MeetPointReached, Tracer, TracerParams
+from tslam.programs.trace_cmd import run_trace
 
 
 def _ring(step_deg: float = 5.0) -> np.ndarray:
@@ -268,13 +269,14 @@ def test_one_deeper_reading_makes_the_sweep_doubtful_and_twice_the_readings_deci
     assert len(sweep_minima(b, d, doubts=doubts)) == 1 and len(doubts) == 1
 
 
-@pytest.mark.parametrize("switches", [[], ["hold_on"]])
-def test_the_tracer_finds_no_meet_point_at_fig12s_cut_corner(switches):
-    """With ``hold_on`` too: homing that held on near a point its sweep had rejected came
-    back to the cut corner every few seconds for minutes (11 meet points in 900 s, not 12)."""
+@pytest.mark.parametrize("params", [TracerParams(), GIVING_UP])
+def test_the_tracer_finds_no_meet_point_at_fig12s_cut_corner(params):
+    """With ``hold_on`` (the default since stop 37) and without: homing that held on near a
+    point its sweep had rejected came back to the cut corner every few seconds for minutes
+    (11 meet points in 900 s, not 12)."""
     backend = create_backend({"backend": "sim", "world": "fig12", "seed": 1, "drift": "paper"})
     true_meets = [(n.x, n.y) for n in compute_gvg(backend.world).nodes if n.kind == "meet"]
-    tracer = Tracer(backend.limits, tracer_params(switches))
+    tracer = Tracer(backend.limits, params)
     robot = backend.robot
     offs: list[float] = []
     with backend:

@@ -9,9 +9,9 @@ robot traced on to meet point 2 or 1: an edge in the map between two places that
 junction between them, which no later visit could place. That was the most common wrong
 edge in fig1 and fig13 explorations (73 of 331 over 12 runs, stop 27's scratch census).
 
-With the tracer's switch ``hold_on``, homing goes on to its last estimate when the third
-echo drops out within ``home_hold_m``, and a sweep that finds the point elsewhere sends
-homing to the sweep's estimate rather than the ring's.
+With ``hold_on`` (a switch up to stop 36, the default since stop 37), homing goes on to its
+last estimate when the third echo drops out within ``home_hold_m``, and a sweep that finds the
+point elsewhere sends homing to the sweep's estimate rather than the ring's.
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from sim_backend.backend import SimBackend
 from sim_backend.builtin_worlds import builtin_world
 from sim_backend.ground_truth import compute_gvg
 from sim_backend.world import PolygonWorld, StartPose
+from tests.tracer_paths import GIVING_UP
 from tslam.core.tracer import BoundaryReached, MeetPointReached, Tracer, TracerParams
-from tslam.programs.trace_cmd import tracer_params
 
 FIG13_MEET0 = (1.5, 3.8)
 
@@ -61,16 +61,16 @@ def first_node(params: TracerParams, seed: int, came_from: int) -> tuple[str, fl
     return "none", math.inf
 
 
-# Seeds from a scratch loop over 1-8 each way with these calls: by default the robot went past
+# Seeds from a scratch loop over 1-8 each way with these calls: giving up, the robot went past
 # meet point 0 in seeds 2, 6 and 7 from meet point 1 and 1, 3 and 8 from meet point 2; with
 # ``hold_on`` it homed there in all 16.
 @pytest.mark.parametrize(("came_from", "seed"), [(1, 2), (1, 6), (2, 1), (2, 3)])
 def test_homing_holds_on_through_the_corner_the_ring_loses(came_from, seed):
-    kind, off = first_node(tracer_params(["hold_on"]), seed, came_from)
+    kind, off = first_node(TracerParams(), seed, came_from)
     assert kind == "meet" and off < 0.15, (kind, off)
 
 
 @pytest.mark.parametrize(("came_from", "seed"), [(1, 2), (2, 1)])
 def test_giving_up_on_the_lost_echo_traces_past_the_meet_point(came_from, seed):
-    kind, off = first_node(TracerParams(), seed, came_from)
+    kind, off = first_node(GIVING_UP, seed, came_from)
     assert kind == "meet" and off > 1.0, (kind, off)

@@ -9,21 +9,36 @@ they test, and the tracer only has to take the robot along that path. Stop 26's 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from tslam.core.tracer import TracerParams
+
+
+def giving_up(params: TracerParams) -> TracerParams:
+    """``params`` with ``hold_on`` off, as up to stop 36: homing gives up when the third echo
+    drops out, and the sweep joins no wall's pieces and no shallow bend's faces."""
+    return replace(params, home_hold_m=0.0, sweep_join_pieces=False, sweep_shallow_bend=False)
+
+
+#: The default tracer as it was up to stop 36.
+GIVING_UP = giving_up(TracerParams())
+
 
 #: Stop 25's tracer: tracing from 0.15 m out of a departure whatever the ring sees, an edge
 #: ended wherever a wall comes within 0.45 m, one sweep at every meet point judged where the
 #: robot stands, and an edge's length taken over its whole chain (stop 31 judges the sweep
 #: at its estimate and drops the chain's spikes: edgelength.py), its sweep reading no recess
-#: and its places no meet point of three corners (on since stop 36).
-STOP25 = TracerParams(
-    depart_until_sides_m=0.0,
-    corner_ahead_m=math.inf,
-    corner_ahead_rad=math.pi,
-    sweep_again=False,
-    edge_spike_ratio=math.inf,
-    spread_at_estimate=False,
-    sweep_recess=False,
-    place_corners=False,
+#: and its places no meet point of three corners (on since stop 36), and homing giving up when
+#: the third echo drops out (``hold_on``, on since stop 37).
+STOP25 = giving_up(
+    TracerParams(
+        depart_until_sides_m=0.0,
+        corner_ahead_m=math.inf,
+        corner_ahead_rad=math.pi,
+        sweep_again=False,
+        edge_spike_ratio=math.inf,
+        spread_at_estimate=False,
+        sweep_recess=False,
+        place_corners=False,
+    )
 )

@@ -83,7 +83,8 @@ class TracerParams:
     # 9 off (0 false merges both), so nothing shows them better yet on the whole.
     # tests/test_tracer_switches.py checks two of them on cases of their own.
     # Homing this close sweeps even if the third echo drops out (0: give up and trace on).
-    home_hold_m: float = 0.0
+    # 0.6 since stop 37, with ``hold_on`` (below).
+    home_hold_m: float = 0.6
     # The side of the edge's null space: the robot's course over its last half metre (True)
     # or the last cycle's tangent (False; with rejected_memory, the course past a rejected
     # meet point all the same).
@@ -124,10 +125,14 @@ class TracerParams:
     # to ``home_hold_m`` 0.6, a sweep joins a wall's pieces that dropouts cut too short to
     # count, and it takes two faces up to 90 degrees apart for one bent wall where the
     # readings between show a shallow bend (sweep.py). It homes onto junctions the ring does
-    # not resolve (fig13's meet points 0 and 5), but the trace metrics are mixed and the
-    # benches no better (README, tracing): off for now.
-    sweep_join_pieces: bool = False
-    sweep_shallow_bend: bool = False
+    # not resolve (fig13's meet points 0 and 5). On since stop 37: the ring loses a convex
+    # corner at a meet point as the robot slows onto it (the corner falls between two beams
+    # and stays there), and giving up homing then passed fig13's and fig14's junctions
+    # unhomed in 18 % and 21 % of the passes of 40-edge traces (seeds 1-12, no drift),
+    # against 11 % and 8 % with it; on the three benches 39 runs complete against 32,
+    # with half the wrong edges (README, stop 37).
+    sweep_join_pieces: bool = True
+    sweep_shallow_bend: bool = True
     # The switch ``vertex``: two runs of a sweep are one bent wall only if no reading between
     # them lies beyond the vertex their faces would make (sweep.py); at fig16's indent a
     # corner and the wall behind it were joined so, and the corridor's meet point rejected.
