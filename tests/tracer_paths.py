@@ -20,7 +20,7 @@ def giving_up(params: TracerParams) -> TracerParams:
     return replace(params, home_hold_m=0.0, sweep_join_pieces=False, sweep_shallow_bend=False)
 
 
-#: The default tracer as it was up to stop 36.
+#: The default tracer with ``hold_on`` off, as up to stop 36 (but for backing off a wedge).
 GIVING_UP = giving_up(TracerParams())
 
 
