@@ -75,6 +75,11 @@ DENSE_BINS = 128
 TOUCH_M = 0.01
 
 
+def at_minimum_range(scan: SonarScan) -> np.ndarray:
+    """Which transducers read their minimum range: something nearer than they can measure."""
+    return scan.ranges_m <= scan.min_range_m + TOUCH_M
+
+
 class Sweep:
     """Collects the firings of a standing robot while its turret turns."""
 
@@ -104,7 +109,7 @@ class Sweep:
         ex = scan.x_m + np.where(np.isfinite(r), r, 0.0) * np.cos(scan.yaw_rad)
         ey = scan.y_m + np.where(np.isfinite(r), r, 0.0) * np.sin(scan.yaw_rad)
         bearing = scan.yaw_rad + heading_rad
-        self.touching += int(np.count_nonzero(new & (r <= scan.min_range_m + TOUCH_M)))
+        self.touching += int(np.count_nonzero(new & at_minimum_range(scan)))
         for i in np.flatnonzero(new):
             self._bearing.append(float(bearing[i]))
             self._dist.append(float(math.hypot(ex[i], ey[i])) if math.isfinite(r[i]) else math.inf)

@@ -23,7 +23,7 @@ from tslam.core import laws
 from tslam.core.edgelength import EdgeOdometer
 from tslam.core.place import place_obstacles
 from tslam.core.sensing import Obstacle, RingSensor, SensingParams
-from tslam.core.sweep import BENT_WALL_MERGE_RAD, TOUCH_M, WIDE_BEND_MERGE_RAD, Sweep
+from tslam.core.sweep import BENT_WALL_MERGE_RAD, WIDE_BEND_MERGE_RAD, Sweep, at_minimum_range
 
 TAU = 2.0 * math.pi
 
@@ -185,8 +185,9 @@ class TracerParams:
     approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
     approach_look_m: float = 0.5  # the arrival direction: from where the robot was this far back
     # A contact is an obstacle the ring did not hear (a convex corner in the gap between two
-    # beams, which driving straight at it keeps there): it is kept, as a point this far
-    # ahead of the centre along the way the base was driving, for this long (0: not kept).
+    # beams, which driving straight at it keeps there): it is kept for this long as a point
+    # where a transducer read its minimum range, else this far ahead of the centre along the
+    # way the base was driving (0: not kept).
     contact_hold_s: float = 0.0
     contact_ahead_m: float = 0.25
     backoff_m: float = 0.25  # reverse this far from a contact before re-accessing ...
@@ -350,7 +351,7 @@ class Tracer:
         minimum range, the one nearest the way the base was driving; else ``contact_ahead_m``
         along that way (the bumper says that, not where)."""
         way = 0.0 if self.s.last_v_sign > 0 else math.pi
-        near = np.flatnonzero(scan.ranges_m <= scan.min_range_m + TOUCH_M)
+        near = np.flatnonzero(at_minimum_range(scan))
         if len(near):
             i = min(near, key=lambda k: abs(_angdiff(float(scan.yaw_rad[k]), way)))
             r = float(scan.ranges_m[i])
@@ -844,7 +845,7 @@ def _to_robot(t: tuple[float, float], odo: Odometry) -> tuple[float, float]:
 def _away_from_touch(scan: SonarScan) -> tuple[float, float] | None:
     """The unit vector (robot frame) away from every transducer that reads its minimum
     range (something nearer than it can measure), or None if none does or they cancel."""
-    near = scan.ranges_m <= scan.min_range_m + TOUCH_M
+    near = at_minimum_range(scan)
     if not near.any():
         return None
     x = -float(np.sum(np.cos(scan.yaw_rad[near])))
