@@ -142,9 +142,10 @@ def test_the_step_onto_a_corridor_centre():
 def test_traced_edges_measure_within_three_percent(tmp_path, capsys):
     """fig12 at drift paper: every meet-to-meet edge within 3 % of the true one (the encoder
     distance alone: 16 % at worst, 6 % median). Seed 1 up to stop 36; with ``hold_on`` on
-    (stop 37) its trace measures 9 such edges, so seed 2 (12, 1.1 % at worst)."""
+    (stop 37) its trace measures 9 such edges, so seed 2 (12, 1.1 % at worst); with corners
+    kept in the ring's gaps (stop 38) seed 2 measures 9, so seed 10 (12, 0.8 % at worst)."""
     code = main(
-        ["trace", "--world", "fig12", "--edges", "12", "--seed", "2", "--out", str(tmp_path)]
+        ["trace", "--world", "fig12", "--edges", "12", "--seed", "10", "--out", str(tmp_path)]
     )
     capsys.readouterr()
     assert code == 0
@@ -155,22 +156,23 @@ def test_traced_edges_measure_within_three_percent(tmp_path, capsys):
     assert report["edge_length_error_median_rel"] <= 0.01
 
 
-def _fig16_seed12_trace() -> dict:
-    backend = create_backend({"backend": "sim", "world": "fig16", "seed": 12, "drift": "paper"})
+def _fig16_seed5_trace() -> dict:
+    backend = create_backend({"backend": "sim", "world": "fig16", "seed": 5, "drift": "paper"})
     return run_trace(backend, 12).report
 
 
 def test_an_edge_is_measured_between_the_meet_points_the_sweeps_estimate(monkeypatch):
-    """fig16 seed 12: measured from where the robot stood when each sweep ended, the trace's
-    worst edge is 12.8 % off; from the meet points the sweeps estimate, 2.7 %. (Pinned on
+    """fig16 seed 5: measured from where the robot stood when each sweep ended, the trace's
+    worst edge is 24.5 % off; from the meet points the sweeps estimate, 2.6 %. (Pinned on
     fig16 seed 2 at stop 31, on fig1 seed 1 at stop 36: the robot homed a few centimetres past
     the room's 2.03 m edge's end, 5.8 % against 1.8 %; with ``hold_on`` on, stop 37, that
-    trace's worst edge is 3.0 % against 1.6 %.)"""
-    report = _fig16_seed12_trace()
+    trace's worst edge is 3.0 % against 1.6 %, so fig16 seed 12, 12.8 % against 2.7 %; with
+    corners kept in the ring's gaps, stop 38, seed 12 traces two such edges.)"""
+    report = _fig16_seed5_trace()
     assert report["meet_to_meet_edges"] >= 4
     assert report["edge_length_error_max_rel"] <= 0.03
     default = trace_cmd.tracer_params
     monkeypatch.setattr(
         trace_cmd, "tracer_params", lambda sw: replace(default(sw), length_at_estimate=False)
     )
-    assert _fig16_seed12_trace()["edge_length_error_max_rel"] > 0.10
+    assert _fig16_seed5_trace()["edge_length_error_max_rel"] > 0.10

@@ -11,6 +11,7 @@ import pytest
 from hal.interfaces import NOMAD200_LIMITS
 from hal.types import DriveStatus, Odometry, SonarScan
 from tslam.core.tracer import Behaviour, Tracer, TracerParams
+from tslam.programs.sim_cmd import explore
 
 CLEAR = DriveStatus(bumper=False, stall=False, motors_on=True, stamp_s=0.0)
 PRESSED = DriveStatus(bumper=True, stall=True, motors_on=True, stamp_s=0.0)
@@ -118,3 +119,22 @@ def test_a_stall_backing_off_with_nothing_at_minimum_range_keeps_backing_straigh
     tracer.step(silent_scan(0.1), odo, CLEAR, 0.1)
     again, _ = tracer.step(silent_scan(0.2), odo, PRESSED, 0.2)
     assert tracer.s.escape is None and again.v_mps < 0.0 and again.steer_radps == 0.0
+
+
+@pytest.mark.parametrize(("before", "armed"), [(Behaviour.TRACE, True), (Behaviour.ACCESS, False)])
+def test_a_contact_while_tracing_arms_the_boundary_rule_again(before, armed):
+    """fig16 seed 7 traced into the indent's back wall, closer than the ring reads: backed off
+    to 0.45 m, short of re-arming the boundary rule, it traced into the wall again, eleven
+    times. Touched while tracing, the edge is taken to end there on the way back in."""
+    tracer = Tracer(NOMAD200_LIMITS, TracerParams(contact_hold_s=0.0))
+    tracer.s.behaviour = before
+    tracer.s.boundary_armed = False
+    odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0)
+    tracer.step(silent_scan(0.0), odo, PRESSED, 0.0)
+    assert tracer.s.behaviour is Behaviour.BACKOFF
+    assert tracer.s.boundary_armed is armed
+
+
+def test_fig16_seed_7_touches_the_indent_once():
+    run = explore("fig16", 7, "paper", duration_s=150.0, progress=False)
+    assert run.backend.robot.collisions == 1

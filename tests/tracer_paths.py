@@ -14,13 +14,24 @@ from dataclasses import replace
 from tslam.core.tracer import TracerParams
 
 
+def before_stop38(params: TracerParams) -> TracerParams:
+    """``params`` as up to stop 37: no convex corner's echo kept while it lies in a gap
+    between the beams (``SensingParams.gap_hold_s``), and homing on the ring's three nearest
+    however far apart their distances (``home_spread_m``)."""
+    return replace(params, home_spread_m=0.0, sensing=replace(params.sensing, gap_hold_s=0.0))
+
+
 def giving_up(params: TracerParams) -> TracerParams:
     """``params`` with ``hold_on`` off, as up to stop 36: homing gives up when the third echo
-    drops out, and the sweep joins no wall's pieces and no shallow bend's faces."""
-    return replace(params, home_hold_m=0.0, sweep_join_pieces=False, sweep_shallow_bend=False)
+    drops out, and the sweep joins no wall's pieces and no shallow bend's faces; and as
+    ``before_stop38``."""
+    return before_stop38(
+        replace(params, home_hold_m=0.0, sweep_join_pieces=False, sweep_shallow_bend=False)
+    )
 
 
-#: The default tracer with ``hold_on`` off, as up to stop 36 (but for backing off a wedge).
+#: The default tracer with ``hold_on`` off, as up to stop 36 (but for backing off a wedge,
+#: and for tracing on after a contact with the boundary rule armed).
 GIVING_UP = giving_up(TracerParams())
 
 

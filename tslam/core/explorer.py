@@ -1524,16 +1524,30 @@ class Explorer:
                     )
                 )
             tested = self._tested()
+        if len(tested) == 1 and tested[0].resumed:
+            # Only a move that tests it is worth waiting for. Rivals no prediction has tested
+            # are unsupported, and a stored map of a few nodes can never confirm its
+            # placement twice: waiting on moves that test only them, the robot resumed in
+            # fig12 (seed 2, killed after one edge) placed each new node on the stored two
+            # and went round the room for hours, mapping it anew each time.
+            if self._tests(tested[0], node):
+                return {}
+            return self._merge(tested[0])
         if node in self.hyps.fragment and self._separating_port(node) is not None:
             return {}
         if len(tested) == 1:
-            if tested[0].resumed:
-                return self._merge(tested[0])
             # Not proven, and nothing to test from here: keep it open for a later edge to
             # test; it ages out if none does. Never merge on a guess.
             return {}
         self._abandon_hypotheses()
         return {}
+
+    def _tests(self, h: Hypothesis, node: int) -> bool:
+        """Whether some unexplored departure of ``node`` would test ``h``."""
+        return any(
+            e is None and predict(self.map, h, node, p) is not None
+            for p, e in enumerate(self.map.node(node).ports)
+        )
 
     def _tested(self) -> list[Hypothesis]:
         """The hypotheses that compete for a merge: those some prediction has tested."""

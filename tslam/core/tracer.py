@@ -74,6 +74,14 @@ class TracerParams:
     # corridor's meet point 0.4 m away, where the sweep then rejected it (0: off).
     home_keep_m: float = 0.0
     home_jump_m: float = 0.2
+    # The ring's three nearest define the point homing goes to only while they are nearly
+    # equidistant (d3 - d1 within this; 0: always). When one of the point's echoes drops out,
+    # the next nearest is some far wall, and the circumcentre with it lies anywhere: at
+    # fig16's weak meet point the robot lost one corner of the indent, took the corridor's
+    # far wall 1.57 m off for the third, and homed 0.4 m back onto the corridor's meet point,
+    # so the indent's departures "could not be held". Such a cycle counts as a lost echo,
+    # which ``home_hold_m`` rides through. Detection starts homing at ``meet_tol_m``.
+    home_spread_m: float = 0.3
     home_max_mps: float = 0.15
     # Five switches, the four below and SensingParams.held_no_support, each fix a failure found
     # in the composed run through both emulators, fig12 seed 6 without drift, which with all
@@ -322,6 +330,12 @@ class Tracer:
             # Touching something means the laws were fed a lie: what the robot touches is
             # inside the sonar's minimum range, invisible to the ring. Back away the way it
             # came (the base drove into it), then re-access.
+            if self.s.behaviour is Behaviour.TRACE:
+                # The edge ran into something the ring does not hear, so close that it
+                # never read as leaving the corner (the boundary rule re-arms only beyond
+                # boundary_clearance_m + 0.1): backed off, the robot would trace into it
+                # again. fig16 seed 7 touched the indent's back wall eleven times so.
+                self.s.boundary_armed = True
             self.s.behaviour = Behaviour.BACKOFF
             self.s.since = now_s
             self.s.depart_from = (odo.x_m, odo.y_m)
@@ -561,6 +575,8 @@ class Tracer:
         if s.behaviour is Behaviour.SETTLE:
             return self._settle(odo, now, events)
         target = laws.circumcentre(*obs[:3]) if len(obs) >= 3 else None
+        if p.home_spread_m > 0.0 and not laws.equidistant(obs, 3, p.home_spread_m):
+            target = None
         if target is not None and self._jumped(target, odo, now):
             target = None
         if target is None or math.hypot(*target) > 1.0:

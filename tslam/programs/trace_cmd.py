@@ -58,7 +58,7 @@ _SETS: dict[str, dict[str, bool | float]] = {
     "sweep_fixed_frame": {"sweep_fixed_frame": True},
     "home_hold": {"home_hold_m": 0.6},  # 0.6 by default since stop 37 (0.15 as a switch before)
     "held_no_support": {"sensing.held_no_support": True},
-    "gap_hold": {"sensing.gap_hold_s": 3.0},
+    "gap_hold": {"sensing.gap_hold_s": 3.0},  # on by default since stop 38
     "place": {"place_radius_m": 0.4},  # on by default since stop 30; older commands still run
     # On by default since stop 37; older commands still run.
     "hold_on": {"home_hold_m": 0.6, "sweep_join_pieces": True, "sweep_shallow_bend": True},
