@@ -1528,8 +1528,8 @@ class Explorer:
             # Only a move that tests it is worth waiting for. Rivals no prediction has tested
             # are unsupported, and a stored map of a few nodes can never confirm its
             # placement twice: waiting on moves that test only them, the robot resumed in
-            # fig12 (seed 2, killed after one edge) placed each new node on the stored two
-            # and went round the room for hours, mapping it anew each time.
+            # fig12 (seed 1, killed after one edge) let its placement age out and went round
+            # the room for hours, mapping it anew each time (tests/test_explorer_resume.py).
             if self._tests(tested[0], node):
                 return {}
             return self._merge(tested[0])

@@ -80,7 +80,7 @@ class TracerParams:
     # fig16's weak meet point the robot lost one corner of the indent, took the corridor's
     # far wall 1.57 m off for the third, and homed 0.4 m back onto the corridor's meet point,
     # so the indent's departures "could not be held". Such a cycle counts as a lost echo,
-    # which ``home_hold_m`` rides through. Detection starts homing at ``meet_tol_m``.
+    # which ``home_hold_m`` rides through. Above ``meet_tol_m``, at which homing starts.
     home_spread_m: float = 0.3
     home_max_mps: float = 0.15
     # Five switches, the four below and SensingParams.held_no_support, each fix a failure found
