@@ -6,7 +6,8 @@ robot homed onto the stored first node and traced the stored edge to the second 
 prediction), but each new node it found looked like one of the two under some other rotation,
 and those untested rivals kept asking for a move to test them. The hypothesis waited, aged
 out unconfirmed (the stored map has no second edge to confirm it by), and the robot went
-round the room for hours mapping it anew: 686 nodes after 45000 s (seed 1 at stop 38)."""
+round the room for hours mapping it anew: 686 nodes after 45000 s (seed 1, on stop 38's
+tracer before this change)."""
 
 from __future__ import annotations
 
