@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from hal.types import Odometry, SonarScan
-from tslam.core.sensing import RingSensor, SensingParams, local_minima
+from tslam.core.sensing import PoseHistory, RingSensor, SensingParams, local_minima
 
 
 def ring_points(ranges, n=None):
@@ -193,3 +193,16 @@ def test_a_corner_kept_in_a_gap_is_let_go_after_gap_hold_s():
     stamps[0] = 1.3  # the corner was heard at 0.2 s
     obs = sensor.update(_scan(far, stamps), Odometry(0.0, 0.0, heading, 0.0, 1.3))
     assert min(o.distance_m for o in obs) > 2.0
+
+
+def test_pose_history_interpolates_a_heading_across_pi():
+    """Halfway between 179 and -179 degrees is 180, not 0; and a pose added since a lookup
+    is seen by the next one (the arrays are built once per pose)."""
+    h = PoseHistory(3.0)
+    h.add(Odometry(0.0, 0.0, math.radians(179.0), 0.0, 0.0))
+    h.add(Odometry(1.0, 0.0, math.radians(-179.0), 0.0, 1.0))
+    mid = h.at(np.array([0.5]))[0]
+    assert mid[0] == pytest.approx(0.5)
+    assert math.cos(mid[2]) == pytest.approx(-1.0) and abs(math.sin(mid[2])) < 1e-9
+    h.add(Odometry(2.0, 0.0, math.radians(-179.0), 0.0, 2.0))
+    assert h.at(np.array([1.5]))[0][0] == pytest.approx(1.5)

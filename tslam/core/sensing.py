@@ -59,8 +59,12 @@ class PoseHistory:
         self.horizon_s = horizon_s
         self._t: deque[float] = deque()
         self._pose: deque[tuple[float, float, float]] = deque()
+        # The arrays ``at`` interpolates in, built once per pose added: it is asked two or
+        # three times a control step (the corner kept in a gap needs the poses twice).
+        self._arrays: tuple[np.ndarray, np.ndarray] | None = None
 
     def add(self, odo: Odometry) -> None:
+        self._arrays = None
         if self._t and odo.stamp_s <= self._t[-1]:
             if odo.stamp_s == self._t[-1]:
                 self._pose[-1] = (odo.x_m, odo.y_m, odo.heading_rad)
@@ -73,13 +77,18 @@ class PoseHistory:
 
     def at(self, stamps: np.ndarray) -> np.ndarray:
         """Poses ``(n, 3)`` at ``stamps``, linearly interpolated; clamped at the ends."""
-        t = np.fromiter(self._t, float, len(self._t))
-        p = np.array(self._pose, dtype=float).reshape(-1, 3)
-        if len(t) == 0:
+        if not self._t:
             raise ValueError("no odometry yet")
+        if self._arrays is None:
+            p = np.array(self._pose, dtype=float).reshape(-1, 3)
+            # As np.unwrap, which changes nothing (and costs 20 us) unless a step crosses pi.
+            if not np.all(np.abs(np.diff(p[:, 2])) < math.pi):
+                p[:, 2] = np.unwrap(p[:, 2])
+            self._arrays = (np.fromiter(self._t, float, len(self._t)), p)
+        t, p = self._arrays
         x = np.interp(stamps, t, p[:, 0])
         y = np.interp(stamps, t, p[:, 1])
-        th = np.interp(stamps, t, np.unwrap(p[:, 2]))
+        th = np.interp(stamps, t, p[:, 2])
         return np.column_stack([x, y, th])
 
     def latest(self) -> tuple[float, float, float]:
@@ -296,8 +305,11 @@ def local_minima(
         level = float(d[idx].max())
         if d[(lo - 1) % n] <= level or d[(hi + 1) % n] <= level:
             continue
-        p = pts[idx].mean(axis=0)
-        dist = float(d[idx].mean())
+        if len(idx) == 1:  # as most are: numpy's mean costs more than the rest of the loop
+            p, dist = pts[i], float(d[i])
+        else:
+            p = pts[idx].mean(axis=0)
+            dist = float(d[idx].mean())
         norm = math.hypot(p[0], p[1])
         if norm < 1e-9:
             continue
