@@ -1530,7 +1530,8 @@ class Explorer:
             # placement twice: waiting on moves that test only them, the robot resumed in
             # fig12 (seed 1, killed after one edge) let its placement age out and went round
             # the room for hours, mapping it anew each time (tests/test_explorer_resume.py).
-            if self._tests(tested[0], node):
+            tests_it = Hypotheses(self.hyps.fragment, [tested[0]])
+            if separating_port(self.map, tests_it, node) is not None:
                 return {}
             return self._merge(tested[0])
         if node in self.hyps.fragment and self._separating_port(node) is not None:
@@ -1541,13 +1542,6 @@ class Explorer:
             return {}
         self._abandon_hypotheses()
         return {}
-
-    def _tests(self, h: Hypothesis, node: int) -> bool:
-        """Whether some unexplored departure of ``node`` would test ``h``."""
-        return any(
-            e is None and predict(self.map, h, node, p) is not None
-            for p, e in enumerate(self.map.node(node).ports)
-        )
 
     def _tested(self) -> list[Hypothesis]:
         """The hypotheses that compete for a merge: those some prediction has tested."""

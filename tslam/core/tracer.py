@@ -574,9 +574,8 @@ class Tracer:
         s, p = self.s, self.p
         if s.behaviour is Behaviour.SETTLE:
             return self._settle(odo, now, events)
-        target = laws.circumcentre(*obs[:3]) if len(obs) >= 3 else None
-        if p.home_spread_m > 0.0 and not laws.equidistant(obs, 3, p.home_spread_m):
-            target = None
+        spread_ok = p.home_spread_m <= 0.0 or laws.equidistant(obs, 3, p.home_spread_m)
+        target = laws.circumcentre(*obs[:3]) if len(obs) >= 3 and spread_ok else None
         if target is not None and self._jumped(target, odo, now):
             target = None
         if target is None or math.hypot(*target) > 1.0:
