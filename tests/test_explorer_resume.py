@@ -11,10 +11,12 @@ tracer before this change)."""
 
 from __future__ import annotations
 
+import math
+
 from hal.registry import create_backend
 from sim_backend.explore_scoring import score_exploration
 from sim_backend.ground_truth import compute_gvg
-from tslam.core.explorer import Explorer
+from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.topomap import TopoMap
 
 
@@ -58,3 +60,31 @@ def test_restarted_after_the_first_edge_the_robot_places_itself_and_completes():
     assert score["false_merges"] == 0
     assert score["duplicate_nodes"] == 0
     assert score["covered"]
+
+
+def test_a_fragment_whose_placement_died_closes_onto_itself_round_the_room():
+    """Seed 2: the restarted robot's placement on the stored pair was refuted before any
+    edge confirmed it, and each node it found after brought new look-alikes, so the fragment
+    stayed open: a fragment's nodes were no candidates for its own new ones, and the robot
+    went round the room mapping it anew each lap (39 nodes after 2000 s). Now the second lap
+    closes onto the first, although hypotheses placing it on the stored pair are still open
+    (both may be true)."""
+
+    def run(params: ExplorerParams) -> Explorer:
+        first = create_backend({"backend": "sim", "world": "fig12", "seed": 2, "drift": "paper"})
+        killed = Explorer(first.limits)
+        _run(killed, first, 600.0, stop=lambda ex: bool(ex.map.edges()))
+        stored = TopoMap.from_dict(killed.map.to_dict())
+        again = create_backend({"backend": "sim", "world": "fig12", "seed": 2, "drift": "paper"})
+        robot = again.robot
+        ex = Explorer(again.limits, params=params, tmap=stored,
+                      truth=lambda: (robot.true_pose().x, robot.true_pose().y))  # fmt: skip
+        _run(ex, again, 2000.0)
+        return ex
+
+    ex = run(ExplorerParams())
+    assert ex.done
+    assert ex.merges and all({d, r}.isdisjoint({1, 2}) for d, r, _, _ in ex.merges[0].pairs)
+    assert all(math.dist(td, tr) < 1.0 for m in ex.merges for _, _, td, tr in m.pairs if td and tr)
+    assert len(ex.map.nodes()) <= 8  # fig12's six, and the stored pair left unplaced
+    assert not run(ExplorerParams(close_fragment=False)).done
