@@ -511,6 +511,7 @@ class Explorer:
         through, self._through = self._through, None
         if through is not None:
             return through  # a weak meet point: carry on along the edge
+        self._fix(node)  # the merge this arrival may make weighs where the robot stands too
         node, pm = self._stand(ev, node, pm, self._resolve(node))
         port = self._next_port(node, pm.arrival)
         if port is None and self.p.place_orphans:
