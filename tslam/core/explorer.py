@@ -1598,8 +1598,10 @@ class Explorer:
         fig12's first edge (seed 2), the placement on the stored pair refuted and each
         lap's new nodes bringing new look-alikes among the stored two, the robot went round
         the room for ever; now the second lap closes onto the first."""
-        loops = [h for h in tested if self._closes_on_itself(h)]
-        others = [h for h in tested if not self._closes_on_itself(h)]
+        loops: list[Hypothesis] = []
+        others: list[Hypothesis] = []
+        for h in tested:
+            (loops if self._closes_on_itself(h) else others).append(h)
         if not loops or not others:
             if 1 < len(loops) <= 2 * FOLD_MAX and self.p.fold_implied:
                 loops = self._fold_implied(loops)  # each lap onto each before: one merge
@@ -1742,7 +1744,6 @@ class Explorer:
             pm = pm.renamed(shift)
         self.here = node
         self._last_visit = (node, ev.departures_rad, pm, ev.x_m, ev.y_m)
-        self._fix(node)
         if len(set(pm.index)) == len(pm.index) == ev.degree:
             self.port_bearings[node] = tuple(ev.departures_rad[i] for i in pm.index)
         self._at = (ev, node, pm)
