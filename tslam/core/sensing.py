@@ -31,6 +31,7 @@ vector pointing away from its closest point, both in the robot frame.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import deque
 from dataclasses import dataclass
@@ -86,10 +87,10 @@ class PoseHistory:
                 p[:, 2] = np.unwrap(p[:, 2])
             self._arrays = (np.fromiter(self._t, float, len(self._t)), p)
         t, p = self._arrays
-        x = np.interp(stamps, t, p[:, 0])
-        y = np.interp(stamps, t, p[:, 1])
-        th = np.interp(stamps, t, p[:, 2])
-        return np.column_stack([x, y, th])
+        out = np.empty((len(stamps), 3))
+        for k in range(3):
+            out[:, k] = np.interp(stamps, t, p[:, k])
+        return out
 
     def latest(self) -> tuple[float, float, float]:
         return self._pose[-1]
@@ -223,11 +224,14 @@ class RingSensor:
         axis = syaw + poses[:, 2] - th0
         ux, uy = np.cos(axis), np.sin(axis)
         dist = px * ux + py * uy
-        pts = np.column_stack([dist * ux, dist * uy])
         # A corner kept through a gap is the point it was, not a wall square to the beam.
-        assert self._gap is not None
-        pts[self._gap] = np.column_stack([px, py])[self._gap]
-        dist = np.where(self._gap, np.hypot(px, py), dist)
+        gap = self._gap
+        assert gap is not None
+        pts = np.empty((n, 2))
+        pts[:, 0] = np.where(gap, px, dist * ux)
+        pts[:, 1] = np.where(gap, py, dist * uy)
+        if gap.any():
+            dist = np.where(gap, np.hypot(px, py), dist)
         fresh = (
             np.ones(n, dtype=bool)
             if self._last_stamp is None or len(self._last_stamp) != n
@@ -245,12 +249,8 @@ class RingSensor:
         # kept for its 1.5 s let a 0.42 m one beside it through, and the robot turned back
         # mid-corridor at a "boundary point").
         support = np.where(self._held, np.inf, far) if self.p.held_no_support else far
-        spike = (
-            fresh
-            & (below < prev)
-            & (below < np.roll(support, 1))
-            & (below < np.roll(support, -1))
-        )
+        after, before = _neighbours(n)
+        spike = fresh & (below < prev) & (below < support[before]) & (below < support[after])
         # A spike is held once; if the transducer repeats it, it is real: ``prev`` is then the
         # held spike, which a repeat is not far below. A second spike far below the first is
         # held in turn (on a ring that fires fast, two outliers on one transducer a few
@@ -260,6 +260,13 @@ class RingSensor:
         self._last_stamp = stamps.copy()
         pts[self._held] = np.nan
         return pts
+
+
+@functools.cache
+def _neighbours(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Index arrays of each reading's neighbours on a ring of ``n`` (as ``np.roll``, cheaper)."""
+    i = np.arange(n)
+    return (i + 1) % n, (i - 1) % n
 
 
 def _in_odometry(
@@ -285,35 +292,41 @@ def local_minima(
     n = len(pts)
     d = np.hypot(pts[:, 0], pts[:, 1])
     d = np.where(np.isnan(d), np.inf, d)
-    if not np.isfinite(d).any():
+    # The ring is 16 readings: plain floats in a Python loop cost a fifth of numpy scalars.
+    dl: list[float] = d.tolist()
+    if min(dl) == math.inf:
         return []
     out: list[tuple[Obstacle, int, int]] = []  # with the plateau's first and last index
-    visited = np.zeros(n, dtype=bool)
+    visited = [False] * n
     for i in range(n):
-        if visited[i] or not math.isfinite(d[i]):
+        di = dl[i]
+        if visited[i] or not math.isfinite(di):
             continue
         # Grow the plateau of readings equal to d[i] around i.
         lo, hi = i, i
-        while hi - lo + 1 < n and abs(d[(hi + 1) % n] - d[i]) <= plateau_m:
+        while hi - lo + 1 < n and abs(dl[(hi + 1) % n] - di) <= plateau_m:
             hi += 1
-        while hi - lo + 1 < n and abs(d[(lo - 1) % n] - d[i]) <= plateau_m:
+        while hi - lo + 1 < n and abs(dl[(lo - 1) % n] - di) <= plateau_m:
             lo -= 1
         idx = [k % n for k in range(lo, hi + 1)]
-        visited[idx] = True
+        for k in idx:
+            visited[k] = True
         if len(idx) == n:
             continue  # the same distance all round: no direction to call an obstacle
-        level = float(d[idx].max())
-        if d[(lo - 1) % n] <= level or d[(hi + 1) % n] <= level:
+        level = di if len(idx) == 1 else max([dl[k] for k in idx])
+        if dl[(lo - 1) % n] <= level or dl[(hi + 1) % n] <= level:
             continue
-        if len(idx) == 1:  # as most are: numpy's mean costs more than the rest of the loop
-            p, dist = pts[i], float(d[i])
-        else:
-            p = pts[idx].mean(axis=0)
-            dist = float(d[idx].mean())
-        norm = math.hypot(p[0], p[1])
+        px, py = pts[i].tolist()
+        dist = di
+        if len(idx) > 1:
+            xy = pts[idx].tolist()
+            px = sum(p[0] for p in xy) / len(idx)
+            py = sum(p[1] for p in xy) / len(idx)
+            dist = sum(dl[k] for k in idx) / len(idx)
+        norm = math.hypot(px, py)
         if norm < 1e-9:
             continue
-        ux, uy = p[0] / norm, p[1] / norm
+        ux, uy = px / norm, py / norm
         ob = Obstacle(dist, ux * dist, uy * dist, -ux, -uy, math.atan2(uy, ux))
         out.append((ob, lo % n, hi % n))
     out.sort(key=lambda t: t[0].distance_m)
