@@ -116,6 +116,27 @@ def test_a_right_angle_bend_is_kept():
     assert odo.length_to(1.0, 1.0) == pytest.approx(1.85, abs=0.01)
 
 
+@pytest.mark.parametrize("clear_m, longer", [(None, False), (0.0, True)])
+def test_points_about_the_end_nodes_are_the_junctions_not_the_edges(clear_m, longer):
+    """fig13 seed 7: leaving a meet point, the two nearest walls are another edge's pair for
+    a while, and the first averaged point lay behind the start; arriving, the last one lay
+    past the end. 1.24 m for an edge of 1.14."""
+    odo = EdgeOdometer() if clear_m is None else EdgeOdometer(end_clear_m=clear_m)
+    odo.start(0.0, 0.0)
+    away = line((0.0, 0.0), (0.5, 0.0), 26)
+    junction = np.array([-0.08, 0.12]) - away  # every step lands on the same point aside
+    travelled = drive(odo, away, junction)
+    travelled = drive(odo, line((0.5, 0.0), (3.0, 0.0)), np.zeros((101, 2)), travelled)
+    past = line((3.0, 0.0), (3.2, 0.0), 11)
+    drive(odo, past, np.array([3.1, -0.1]) - past, travelled)
+    length = odo.length_to(3.0, 0.0)
+    assert length is not None
+    if longer:
+        assert length > 3.15
+    else:
+        assert length == pytest.approx(3.0, abs=0.02)
+
+
 def test_a_step_too_long_to_be_onto_this_edge_is_not_taken():
     odo = EdgeOdometer()
     odo.start(0.0, 0.0)
