@@ -7,8 +7,10 @@ from __future__ import annotations
 import math
 
 from hal.interfaces import NOMAD200_LIMITS
+from hal.types import Odometry
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
+from tslam.core.stands import Stands
 from tslam.programs.sim_cmd import explore, report
 
 
@@ -48,3 +50,50 @@ def test_a_block_of_a_grid_maze_is_not_merged_onto_its_look_alike_17_m_away():
     params = ExplorerParams(drift_rel=10.0)
     blind = explore("maze:4", 1, "paper", duration_s=1000.0, progress=False, params=params)
     assert report(blind, "maze:4", 1, "paper")["false_merges"] > 0
+
+
+def test_the_bound_holds_over_the_shortest_chain_of_stands_through_merged_places():
+    """Stands at a -> b -> c, much later x -> b (x merged onto b), then at y after a long
+    way round: the chain y - x=b - a is short, though the metres between the last stands
+    at y and at a are many."""
+    st = Stands()
+    for node, x, d in [(1, 0.0, 0.0), (2, 2.0, 2.0), (3, 4.0, 4.0), (9, 30.0, 80.0)]:
+        st.add(node, x, 0.0, d)
+    st.add(5, 12.0, 0.0, 90.0)  # b again, dead reckoning 10 m off by now
+    st.add(6, 15.0, 0.0, 93.0)
+    st.rename(5, 2)
+    chains = st.chains([(6, 1), (6, 3), (1, 1)])
+    assert set(chains) == {(6, 1), (6, 3)}  # one node with itself is no chain
+    gap, metres = chains[(6, 1)]
+    assert math.isclose(gap, 5.0) and math.isclose(metres, 5.0)  # 6 -> 5=2 -> 1
+    gap, metres = chains[(6, 3)]
+    assert math.isclose(gap, 1.0) and math.isclose(metres, 5.0)  # 6 -> 5=2 -> 3
+
+
+def test_a_merge_the_chain_refutes_is_refused_though_the_last_stands_are_far_apart_in_time():
+    ex = Explorer(NOMAD200_LIMITS)
+    nodes = [ex.map.add_meet(1.0, [0.0, math.pi / 2, math.pi], (0.0, 0.0)) for _ in range(3)]
+    a, b, x = nodes
+    stands = [(a, 0.0, 0.0), (b, 3.0, 3.0), (x, 12.0, 100.0), (b, 9.0, 110.0)]
+    for node, px, d in stands:
+        ex._odo = Odometry(
+            x_m=px, y_m=0.0, heading_rad=0.0, turret_rad=0.0, stamp_s=d, distance_m=d
+        )
+        ex._fix(node)
+    # x's last stand and a's: 12 m apart after 100 m, within 1.5 + 15. But b joins them by
+    # 13 m: x -> b 10 m (dead reckoning 3 m back), b -> a 3 m (3 m back): 6 m > 3.45.
+    far = ex._drifted_apart(Hypothesis({x: (a, 0)}))
+    assert far is not None and far[:2] == (x, a)
+    assert math.isclose(far[2], 6.0) and math.isclose(far[3], 13.0)
+    ex.p = ExplorerParams(drift_chain=False)
+    assert ex._drifted_apart(Hypothesis({x: (a, 0)})) is None
+
+
+def test_maze5_severe_seed5_makes_no_false_merge():
+    """Six places ~10 m from their look-alikes after 67-100 m driven: inside the bound over
+    the metres between the last stands, beyond it over the chain of 25-41 m that joins them."""
+    run = explore("maze:5", 5, "severe", duration_s=2500.0, progress=False)
+    assert report(run, "maze:5", 5, "severe")["false_merges"] == 0
+    params = ExplorerParams(drift_chain=False)
+    blind = explore("maze:5", 5, "severe", duration_s=2500.0, progress=False, params=params)
+    assert report(blind, "maze:5", 5, "severe")["false_merges"] > 0
