@@ -210,8 +210,12 @@ class ExplorerParams:
     # between its last stands at them. maze:5 seed 5 at drift ``severe`` merged six places
     # 10 m from their look-alikes after 67-100 m driven; chains of 25-41 m joined them. In
     # the 175 runs above (stop 40's code) the 688 true pairs all came 1.8 m or more inside
-    # it, the 13 false ones 2.9-5.2 m beyond.
-    drift_chain: bool = True
+    # it, the 13 false ones 2.9-5.2 m beyond. Off: it is not sound as it stands. A chain's
+    # hops may be driven hundreds of metres apart, each turned by the heading error of its
+    # time: fig1 seed 13 (drift paper) had a true merge refused, 3.9 m over a 12 m chain whose
+    # first hop was driven at 28 m and the others at 186-288 m, some 50 degrees apart in
+    # heading error. Each hop needs turning by the heading drift its revisits measure first.
+    drift_chain: bool = False
     # Gone through the expected node without homing (a weak meet point): this traversal's
     # own dead-reckoned path says which way the robot turned there (``tslam.core.walkon``).
     walk: WalkParams = field(default_factory=WalkParams)

@@ -11,7 +11,10 @@ times (a corridor traced on the first lap, and again after the loop closed). The
 displacement summed along the hops of the shortest such chain then bounds the distance
 between the two places far tighter: a false merge that dead reckoning cannot refute over 67
 metres driven (maze:5 seed 5 at drift ``severe``: six places ~10 m from their look-alikes,
-0.13 of the metres) is 10 m apart over a chain of 25 m.
+0.13 of the metres) is 10 m apart over a chain of 25 m. But each hop's displacement is turned
+by the heading error of its time, and hops driven hundreds of metres apart differ by tens of
+degrees: the sum does not allow for that yet, so the explorer leaves it off
+(``ExplorerParams.drift_chain``).
 """
 
 from __future__ import annotations
