@@ -80,10 +80,11 @@ class EdgeOdometer:
             return None
         pending = self._pending()
         chain = [*self._chain, *([pending] if pending is not None else []), (x_m, y_m)]
-        a, b = chain[0], chain[-1]
-        far = self.end_clear_m
-        inner = [q for q in chain[1:-1] if math.dist(q, a) >= far and math.dist(q, b) >= far]
-        chain = _without_spikes([a, *inner, b], self.detour_ratio)
+        first, last, clear = chain[0], chain[-1], self.end_clear_m
+        inner = [
+            q for q in chain[1:-1] if math.dist(q, first) >= clear and math.dist(q, last) >= clear
+        ]
+        chain = _without_spikes([first, *inner, last], self.detour_ratio)
         return float(sum(math.dist(a, b) for a, b in itertools.pairwise(chain)))
 
     def _pending(self) -> Point | None:

@@ -348,6 +348,8 @@ class Explorer:
         # Node -> where dead reckoning put the robot when it last stood there, and the
         # encoder distance then (nodes of a stored map have none until visited).
         self.fixes: dict[int, tuple[float, float, float]] = {}
+        # Every stand at a node, for the chained bound (``drift_chain``; kept only with it on:
+        # a daemon's list would grow by every arrival for as long as it runs).
         self.stands = Stands()
         # Edge -> how far apart dead reckoning put its two ends, read one traversal apart.
         self.edge_gap: dict[int, float] = {}
@@ -2218,7 +2220,8 @@ class Explorer:
     def _fix(self, node: int) -> None:
         if self._odo is not None:
             self.fixes[node] = (self._odo.x_m, self._odo.y_m, self._odo.distance_m)
-            self.stands.add(node, self._odo.x_m, self._odo.y_m, self._odo.distance_m)
+            if self.p.drift_chain:
+                self.stands.add(node, self._odo.x_m, self._odo.y_m, self._odo.distance_m)
 
     def _drifted_apart(self, h: Hypothesis) -> tuple[int, int, float, float] | None:
         """The first pair ``h`` makes one place that dead reckoning put further apart than
