@@ -1617,12 +1617,10 @@ class Explorer:
         others: list[Hypothesis] = []
         for h in tested:
             (loops if self._closes_on_itself(h) else others).append(h)
-        if not loops or not others:
-            if 1 < len(loops) <= 2 * FOLD_MAX and self.p.fold_implied:
-                loops = self._fold_implied(loops)  # each lap onto each before: one merge
-            return loops or others, [], False
         if 1 < len(loops) <= 2 * FOLD_MAX and self.p.fold_implied:
-            loops = self._fold_implied(loops)
+            loops = self._fold_implied(loops)  # each lap onto each before: one merge
+        if not loops or not others:
+            return loops or others, [], False
         if 1 < len(others) <= FOLD_MAX and self.p.fold_implied:
             others = self._fold_implied(others)
         weigh = self.p.weigh_crowd
