@@ -29,6 +29,8 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.ops import unary_union
 
+from sim_backend.grid_walls import grid_walls, wall_tolerance
+
 
 class WorldError(ValueError):
     """A world definition is unusable; the message names what is wrong."""
@@ -131,7 +133,8 @@ class GridWorld(World):
 
     ``origin`` is the world position of the lower-left corner of cell (0, 0), as in ROS
     map_server (whose images have row 0 at the top: loaders flip them before building this).
-    Cells outside the grid count as occupied.
+    Cells outside the grid count as occupied. The walls are the cells' boundary straightened
+    within about a cell (``sim_backend.grid_walls``); collisions use the cells.
     """
 
     def __init__(
@@ -153,7 +156,9 @@ class GridWorld(World):
         self.occupied = occ
         self.resolution_m = float(resolution_m)
         self.origin = (float(origin[0]), float(origin[1]))
-        segments, corners, convex = _grid_geometry(occ, self.resolution_m, self.origin)
+        segments, corners, convex = grid_walls(
+            occ, self.resolution_m, self.origin, wall_tolerance(self.resolution_m)
+        )
         rows, cols = occ.shape
         ox, oy = self.origin
         super().__init__(
@@ -333,54 +338,3 @@ def _drop_collinear(pts: np.ndarray, tol: float = 1e-9) -> np.ndarray:
         if abs(cross) > tol * max(1.0, np.linalg.norm(c - a) ** 2):
             keep.append(b)
     return np.asarray(keep)
-
-
-def _grid_geometry(
-    occ: np.ndarray, res: float, origin: tuple[float, float]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Wall segments along cell edges between free and occupied cells, merged into runs."""
-    rows, cols = occ.shape
-    padded = np.ones((rows + 2, cols + 2), dtype=bool)
-    padded[1:-1, 1:-1] = occ
-    ox, oy = origin
-    segs: list[tuple[float, float, float, float]] = []
-    # Horizontal edges: between padded row r and r+1, at world y = oy + r * res.
-    horiz = padded[:-1, 1:-1] != padded[1:, 1:-1]
-    for r in range(horiz.shape[0]):
-        for c0, c1 in _runs(horiz[r]):
-            y = oy + r * res
-            segs.append((ox + c0 * res, y, ox + c1 * res, y))
-    vert = padded[1:-1, :-1] != padded[1:-1, 1:]
-    for c in range(vert.shape[1]):
-        for r0, r1 in _runs(vert[:, c]):
-            x = ox + c * res
-            segs.append((x, oy + r0 * res, x, oy + r1 * res))
-    # A lattice vertex is a corner when exactly one or three of its four cells are free,
-    # or two diagonal cells are (a pinch, treated as two convex corners).
-    quad = (
-        (~padded[:-1, :-1]).astype(np.int8)
-        + (~padded[:-1, 1:])
-        + (~padded[1:, :-1])
-        + (~padded[1:, 1:])
-    )
-    diag = (
-        (padded[:-1, :-1] == padded[1:, 1:])
-        & (padded[:-1, 1:] == padded[1:, :-1])
-        & (padded[:-1, :-1] != padded[:-1, 1:])
-    )
-    is_corner = (quad == 1) | (quad == 3) | diag
-    vr, vc = np.nonzero(is_corner)
-    corners = np.column_stack([ox + vc * res, oy + vr * res]).astype(float)
-    convex = (quad[vr, vc] == 3) | diag[vr, vc]
-    return np.asarray(segs, dtype=float).reshape(-1, 4), corners, convex
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """Half-open index runs ``[start, end)`` where ``mask`` is True."""
-    if not mask.any():
-        return []
-    m = np.concatenate([[False], mask, [False]]).astype(np.int8)
-    d = np.diff(m)
-    starts = np.nonzero(d == 1)[0]
-    ends = np.nonzero(d == -1)[0]
-    return list(zip(starts.tolist(), ends.tolist(), strict=True))
