@@ -68,8 +68,8 @@ def grid_walls(
 def boundary_rings(occ: np.ndarray) -> list[np.ndarray]:
     """The free/occupied boundary as closed rings of lattice vertices (row, col), free space
     on the left, with only the vertices where the ring turns. Where two occupied cells touch
-    only at a corner the ring turns right, round the occupied side, so diagonal neighbours
-    are one obstacle, as they are to the sonar."""
+    only at a corner the ring goes on round both, so diagonal neighbours are one obstacle,
+    as they are to the sonar."""
     rows, cols = occ.shape
     padded = np.ones((rows + 2, cols + 2), dtype=bool)
     padded[1:-1, 1:-1] = occ
@@ -96,8 +96,9 @@ def boundary_rings(occ: np.ndarray) -> list[np.ndarray]:
         v, d = start, -1
         ring = []
         while dirs := out.get(v):
-            # The rightmost turn from the way in keeps to the occupied side at a pinch.
-            k = 0 if len(dirs) == 1 else min(range(len(dirs)), key=lambda k: (dirs[k] - d + 1) % 4)
+            # At a pinch, turning left (free space is on the left) goes on round the occupied
+            # cell diagonal to the one just passed.
+            k = 0 if len(dirs) == 1 else max(range(len(dirs)), key=lambda k: (dirs[k] - d + 2) % 4)
             nd = dirs.pop(k)
             if not dirs:
                 del out[v]
