@@ -138,6 +138,24 @@ def test_console_script_reports_bad_option_without_traceback(tmp_path):
     assert "--duration must be a positive number" in r.stderr
 
 
+def test_output_cut_short_by_its_reader_ends_quietly():
+    # ``tslam world info office:1 --json | head``: far more than a pipe's buffer, and the
+    # reader closes after the first line.
+    p = subprocess.Popen(
+        [sys.executable, "-m", "tslam.programs.cli", "world", "info", "office:1", "--json"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )  # fmt: skip
+    try:
+        assert p.stdout is not None and p.stdout.readline().strip() == b"{"
+        p.stdout.close()
+        _, err = p.communicate(timeout=120)
+    finally:
+        p.kill()
+        p.wait()
+    assert p.returncode == 141
+    assert err == b""
+
+
 def test_bench_control_prints_step_times(capsys):
     code, out, _ = run(capsys, "bench", "control", "--json", "--steps", "120")
     result = json.loads(out)
