@@ -254,9 +254,6 @@ class ExplorerParams:
     # daemon's, killed after its first edge) then took another way, into a copy of a
     # junction reached by a departure not held, and never finished.
     cut_past: bool = False
-    # A dead end reached partway along a known edge, by the edge's own departure: the edge went
-    # past the junction the dead end branches from, and it goes (``_dead_end_on_edge``).
-    dead_end_split: bool = True
     # A meet point found partway along a known edge goes into the map, even with a departure
     # straight on: placed on the edge by the recent pass if there is one, else the rest of
     # the edge is forgotten (``_junction_on_edge``). Off, as before stop 28: such a junction
@@ -1404,14 +1401,6 @@ class Explorer:
             self.plan = []
             b = self._add_boundary(ev)
             self._note(f"expected node {w} after edge {e}, found a boundary: node {b}")
-            if self._dead_end_on_edge(f, j, e, length):
-                self._drop_placing_both(f, w)
-                self.map.remove_edge(e)
-                self.edge_gap.pop(e, None)
-                self._note(
-                    f"a dead end {length:.2f} m along edge {e} ({f}-{w}), which went past the "
-                    "junction it branches from: the edge is removed"
-                )
             self._leave(b, 0)
             return
         if self._walked_to_boundary(ev, length, back=True) or self._boundary_again(
@@ -1419,28 +1408,6 @@ class Explorer:
         ):
             return
         self._boundary_on_new_edge(ev, f, self._departure_taken(f, j), length)
-
-    def _dead_end_on_edge(self, f: int, j: int, e: int, length: float | None) -> bool:
-        """Whether a dead end reached ``length`` metres out along known edge ``e`` from meet
-        point ``f`` says the edge went past a junction, unhomed, that the dead end branches
-        from: the robot left by the edge's own departure (as far as its way out shows), drove
-        undisturbed and stopped shorter than the edge. The edge is then no edge of the
-        building (``dead_end_split``), as a meet point found partway along one says
-        (``_junction_on_edge``). Kept, its two ends' departures stay explored, so neither end
-        is ever a look-alike of the junction's neighbours as the robot finds them again:
-        office:3's edge from meet point 71 to 66 went past meet point 65; sent back along it,
-        the robot went into 65's dead end, mapped 65 and all beyond it afresh, and with the
-        only way back to the old map explored, ended its exploration with 4 of the floor's
-        362 places."""
-        if not self.p.dead_end_split or length is None or self.disturbed or self.detoured:
-            return False
-        if self.map.node(f).kind != "meet":
-            return False
-        edge = self.map.edge(e)
-        tol = self._tol()
-        if length >= edge.length_m - tol.length_abs_m - tol.length_rel * edge.length_m:
-            return False
-        return self._left_by(f) in (j, None)
 
     def _boundary_again(self, ev: BoundaryReached, f: int, j: int, length: float | None) -> bool:
         """Sent out by unexplored departure ``j`` of junction ``f``, the robot went out by
