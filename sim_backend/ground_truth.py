@@ -94,7 +94,7 @@ BENT_WALL_RATIO = 1.5
 #: 0.15 m minimum range see one wall), but a building map made by SLAM has one every few
 #: cells of its walls, and each is a 2-3 ratio that otherwise made a spur of the GVG into
 #: it: a 30 x 16 m office floor at 5 cm cells, one wall cell in seven flipped, had 445 meet
-#: points for the 53 of its clean walls (50 with this rule). No built-in or generated world
+#: points for the 53 of its clean walls (50 with this rule alone). No built-in or generated world
 #: has a detour this short between two sides of a GVG edge.
 MIN_DETOUR_M = 0.2
 DEFAULT_MAX_CLEARANCE_M = RING_RADIUS_M + SONAR_MAX_RANGE_M
