@@ -19,7 +19,7 @@ from tests.graph_walk import from_ground_truth, passed_once, walk
 from tests.test_explorer_graph import false_merges
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
-from tslam.core.tracer import MeetPointReached
+from tslam.core.tracer import BoundaryReached, MeetPointReached
 
 TAU = 2 * math.pi
 PAST = ExplorerParams(cut_past=True)
@@ -249,3 +249,23 @@ def test_a_junction_to_a_dead_end_passed_unhomed_once_is_found_on_the_way_back()
     assert sum(n.kind == "meet" for n in runs[True].map.nodes()) == len(gvg.meet_points)
     assert len(runs[True].map.edges()) == len(gvg.edges)
     assert sum(n.kind == "meet" for n in runs[False].map.nodes()) == len(gvg.meet_points) - 1
+
+
+def test_a_hypothesis_refuted_at_a_dead_end_is_said_so():
+    # X is A again; A's east edge leads to M. Leaving X east the robot comes to a dead end
+    # after 1 m: X = A is refuted there, and the progress log says so.
+    ex = Explorer(NOMAD200_LIMITS)
+    a, _, _ = _a_m_b(ex)
+    _x_is_a_again(ex, a)
+    ex._on_boundary(BoundaryReached(0.0, 21.0, 0.0, 0.4, 1.0))
+    assert ex.hyps.live == []
+    b = max(n.id for n in ex.map.nodes())
+    assert ex.notes[-1].text == f"boundary {b}: 1 hypothesis(es) refuted, 0 open"
+    # A dead end where the hypothesis predicts one, as long, confirms it: nothing to say.
+    ex = Explorer(NOMAD200_LIMITS)
+    a = _add(ex, 1.0, A_DEPS, 0.0)
+    ex.map.connect(a, 0, ex.map.add_boundary(0.4, (1.0, 0.0)), 0, 1.0)
+    _, h = _x_is_a_again(ex, a)
+    ex._on_boundary(BoundaryReached(0.0, 21.0, 0.0, 0.4, 1.0))
+    assert ex.hyps.live == [h] and h.dead_ends == 1
+    assert not any("refuted" in n.text for n in ex.notes)

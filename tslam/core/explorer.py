@@ -1481,7 +1481,14 @@ class Explorer:
         for h, w in confirmed:
             h.mapping[b] = (w, 0)
             h.dead_ends += 1
+        refuted = len(self.hyps.live) - len(survivors)
         survivors = self._age(survivors, {id(h) for h, _ in confirmed})
+        if refuted:
+            # Said, as at a meet point: a hypothesis that vanished at a dead end unnoted left
+            # a progress log of look-alikes none of which was ever refuted.
+            self._note(
+                f"boundary {b}: {refuted} hypothesis(es) refuted, {len(survivors)} open"
+            )
         self.hyps.live = survivors
         if survivors:
             self.hyps.fragment.add(b)
