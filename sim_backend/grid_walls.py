@@ -93,33 +93,25 @@ def boundary_rings(occ: np.ndarray) -> list[np.ndarray]:
     while out:
         # Not from a pinch, where the way in (unknown at the start) picks the way out.
         start = next((v for v, dirs in out.items() if len(dirs) == 1), next(iter(out)))
-        v, d = start, -1
+        v, d, first = start, -1, -1
         ring = []
         while dirs := out.get(v):
             # At a pinch, turning left (free space is on the left) goes on round the occupied
             # cell diagonal to the one just passed.
             k = 0 if len(dirs) == 1 else max(range(len(dirs)), key=lambda k: (dirs[k] - d + 2) % 4)
             nd = dirs.pop(k)
+            first = nd if first < 0 else first
             if not dirs:
                 del out[v]
             if nd != d:
                 ring.append(v)
             d = nd
             v = (v[0] + _STEPS[d][0], v[1] + _STEPS[d][1])
-        rings.append(np.asarray(_turning(ring), dtype=np.int64).reshape(-1, 2))
+        # Every vertex kept turns, but maybe the one the walk began at, mid-edge.
+        if len(ring) > 1 and d == first:
+            ring = ring[1:]
+        rings.append(np.asarray(ring, dtype=np.int64).reshape(-1, 2))
     return [r for r in rings if len(r) >= 4]
-
-
-def _turning(ring: list[tuple[int, int]]) -> list[tuple[int, int]]:
-    """The ring's turning vertices (where it started may be mid-edge)."""
-    pts = np.asarray(ring, dtype=np.int64)
-    if len(pts) < 3:
-        return ring
-    prev, nxt = np.roll(pts, 1, axis=0), np.roll(pts, -1, axis=0)
-    cross = (pts[:, 0] - prev[:, 0]) * (nxt[:, 1] - pts[:, 1]) - (pts[:, 1] - prev[:, 1]) * (
-        nxt[:, 0] - pts[:, 0]
-    )
-    return [tuple(p) for p, c in zip(pts.tolist(), cross.tolist(), strict=True) if c != 0]
 
 
 def _straightened(pts: np.ndarray, tolerance_m: float) -> np.ndarray:

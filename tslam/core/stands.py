@@ -34,9 +34,6 @@ class Stands:
         self._log: list[tuple[int, float, float, float]] = []
         self._renamed: dict[int, int] = {}
 
-    def __len__(self) -> int:
-        return len(self._log)
-
     def add(self, node: int, x_m: float, y_m: float, distance_m: float) -> None:
         """The robot stands at ``node``; dead reckoning puts it at ``(x, y)`` (odometry
         frame), after ``distance_m`` of encoder travel."""
