@@ -206,3 +206,32 @@ def test_pose_history_interpolates_a_heading_across_pi():
     assert math.cos(mid[2]) == pytest.approx(-1.0) and abs(math.sin(mid[2])) < 1e-9
     h.add(Odometry(2.0, 0.0, math.radians(-179.0), 0.0, 2.0))
     assert h.at(np.array([1.5]))[0][0] == pytest.approx(1.5)
+
+
+def test_a_doorways_jambs_are_kept_apart_where_the_ring_sees_through_between_them():
+    # Two jambs 45 degrees apart (indices 3 and 5) with the view through the door between
+    # them: one obstacle to the trace law, as close minima always are, two in ``apart``.
+    r = [4.0] * 16
+    r[3], r[4], r[5] = 1.2, 3.0, 1.22
+    r[11] = 2.9  # the far wall behind
+    sensor = RingSensor()
+    pts = ring_points(r)
+    sensor.echo_points = lambda scan: pts  # the update's echoes, as a scan would give them
+    scan = _scan([1.0] * 16, np.zeros(16))
+    obs = sensor.update(scan, Odometry(0.0, 0.0, 0.0, 0.0, 0.0))
+    near = [o for o in obs if o.distance_m < 2.0]
+    assert len(near) == 1
+    apart = [o for o in sensor.apart if o.distance_m < 2.0]
+    assert [round(o.distance_m, 2) for o in apart] == [1.2, 1.22]
+    # A reading between that is not 1.4 times deeper (a bend's vertex) keeps them one.
+    r[4] = 1.6
+    pts = ring_points(r)
+    obs = sensor.update(scan, Odometry(0.1, 0.0, 0.0, 0.0, 0.0))
+    assert len([o for o in sensor.apart if o.distance_m < 2.0]) == 1
+    # With view_ratio 0 nothing is kept apart.
+    r[4] = 3.0
+    pts = ring_points(r)
+    off = RingSensor(SensingParams(view_ratio=0.0))
+    off.echo_points = lambda scan: pts
+    off.update(scan, Odometry(0.0, 0.0, 0.0, 0.0, 0.0))
+    assert len([o for o in off.apart if o.distance_m < 2.0]) == 1

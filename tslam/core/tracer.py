@@ -182,6 +182,13 @@ class TracerParams:
     # wall's echo (six to ten of sixteen transducers fall silent in a corridor), and the
     # re-access it used to set off disturbed the edge's length. 0: re-access at once.
     off_edge_coast_s: float = 0.0
+    # Tracing away from a doorway, its jambs close in bearing as the robot leaves them, and
+    # the ring joins them into one obstacle under 50 degrees apart (SensingParams.merge_rad):
+    # the edge's pair is gone and the robot went off the graph 1.1 m into office:1's rooms,
+    # re-accessed, and homed onto the room's meet point as a place of a new fragment. Where
+    # the pair is lost so, the jambs the view between keeps apart go on as the pair.
+    doorway_pairs: bool = True
+    arm_on_access: bool = True  # see Behaviour.ACCESS in ``_law``
     # An edge's length drops the points its chain goes out to and comes back from, at this
     # ratio of chords (edgelength.py; inf: none dropped, as up to stop 30).
     edge_spike_ratio: float = 1.5
@@ -192,6 +199,16 @@ class TracerParams:
     left_meet_travel_m: float = 2.0  # ... unless the robot has travelled this far since
     approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
     approach_look_m: float = 0.5  # the arrival direction: from where the robot was this far back
+    # The edge the robot came in by is one of the meet point's edges even where the sweep does
+    # not show it: a room's meet point 2.9 m from its 1 m door hears the jambs 19 degrees apart,
+    # inside one beam, and read office:1's degree-4 meet point 94 with three edges, none
+    # within 39 degrees of the way in; the robot, sent back out along the nearest, went into
+    # a corner of the room. So a way in (the bearing back to where the robot traced
+    # ``way_in_m`` off, the last 2.5 times that of travel) farther than this from every
+    # departure seen is a departure of its own. Over 20 explorations of fig1-fig16 (1500 s,
+    # drift paper) the way in was never more than 30 degrees off a departure (0: off).
+    unseen_way_in_rad: float = math.radians(35.0)
+    way_in_m: float = 1.0
     # A contact is an obstacle the ring did not hear (a convex corner in the gap between two
     # beams, which driving straight at it keeps there): it is kept for this long as a point
     # where a transducer read its minimum range, else this far ahead of the centre along the
@@ -311,6 +328,7 @@ class Tracer:
         self.s = _State()
         self.s.odometer.detour_ratio = self.p.edge_spike_ratio
         self.obstacles: list[Obstacle] = []
+        self._apart: list[Obstacle] = []
         self._scan: SonarScan | None = None
 
     @property
@@ -320,8 +338,12 @@ class Tracer:
     def step(
         self, scan: SonarScan, odo: Odometry, status: DriveStatus, now_s: float
     ) -> tuple[Twist, list[Event]]:
-        obs = self._with_contacts(self.sensor.update(scan, odo), odo, now_s)
+        raw = self.sensor.update(scan, odo)
+        obs = self._with_contacts(raw, odo, now_s)
         self.obstacles = obs
+        # A doorway's jambs, kept apart by the view between them: the edge through it.
+        apart = self.sensor.apart
+        self._apart = obs if apart is raw else self._with_contacts(apart, odo, now_s)
         self._scan = scan
         events: list[Event] = []
         if (status.bumper or status.stall) and self.s.behaviour is not Behaviour.BACKOFF:
@@ -407,7 +429,12 @@ class Tracer:
                 if t is not None:
                     s.tangent = _to_odom(t, odo)
                     s.behaviour = Behaviour.TRACE
-                    s.armed = not laws.equidistant(obs, 3, p.arm_tol_m)
+                    # Re-accessed beside a meet point other than the last (off the graph
+                    # where a room's door went out of hearing, office:1's 94 lay 0.75 m on),
+                    # the three stand equidistant already: armed, or it is passed unhomed.
+                    s.armed = not laws.equidistant(obs, 3, p.arm_tol_m) or (
+                        p.arm_on_access and self._new_meet_ahead(obs, odo, anywhere=True)
+                    )
                     return self._law(obs, odo, now, events)
             v = laws.access_velocity(obs, p.access_mps)
             # Backing away is as good as driving away, and spares a half turn.
@@ -452,6 +479,8 @@ class Tracer:
             s.boundary_armed = False  # until the robot is clear of this corner again
             self._boundary(obs[0].distance_m, odo, now, events)
             return None
+        if obs[1].distance_m - obs[0].distance_m > p.off_edge_m and p.doorway_pairs:
+            obs = self._doorway(obs)
         if obs[1].distance_m - obs[0].distance_m > p.off_edge_m:
             if now - s.last_paired <= p.off_edge_coast_s:
                 return s.last_twist
@@ -483,6 +512,16 @@ class Tracer:
         if not s.trail or odo.distance_m - s.trail[-1][0] >= 0.02:
             s.trail.append((odo.distance_m, odo.x_m, odo.y_m))
         return v
+
+    def _doorway(self, obs: list[Obstacle]) -> list[Obstacle]:
+        """``obs`` with a doorway's jambs two obstacles again, if that puts the robot on an
+        edge: the nearest two equidistant where the ring had merged them (``view_ratio``)."""
+        apart = self._apart
+        if len(apart) > len(obs) and (
+            apart[1].distance_m - apart[0].distance_m <= self.p.off_edge_m
+        ):
+            return apart
+        return obs
 
     def _corner_ahead(self, odo: Odometry) -> bool:
         """Whether the ring hears something close ahead along the edge: the corner it ends
@@ -554,18 +593,29 @@ class Tracer:
             p.left_meet_m
         )
 
-    def _new_meet_ahead(self, obs: list[Obstacle], odo: Odometry) -> bool:
+    def _new_meet_ahead(self, obs: list[Obstacle], odo: Odometry, anywhere: bool = False) -> bool:
         """Right after a meet point the three closest obstacles stay nearly equidistant; the
-        robot is nearing another meet point only if their circumcentre has moved on, ahead."""
+        robot is nearing another meet point only if their circumcentre has moved on, ahead
+        (or, ``anywhere``, within ``meet_radius_m`` and ``left_meet_m`` from the last)."""
         s, p = self.s, self.p
-        if len(obs) < 3 or s.last_meet is None or s.tangent is None:
+        if len(obs) < 3 or (s.last_meet is None and not anywhere):
+            return False
+        if s.tangent is None and not anywhere:
             return False
         c = laws.circumcentre(*obs[:3])
         if c is None:
             return False
         cx, cy = _to_odom(c, odo)
+        if anywhere and s.last_meet is None:
+            return math.hypot(cx, cy) <= p.meet_radius_m
+        last = s.last_meet
+        assert last is not None
+        moved = math.hypot(odo.x_m + cx - last[0], odo.y_m + cy - last[1])
+        if anywhere:
+            return math.hypot(cx, cy) <= p.meet_radius_m and moved >= max(
+                p.left_meet_m, p.rejected_meet_m if s.rejected else p.new_meet_m
+            )
         ahead = cx * s.tangent[0] + cy * s.tangent[1] > 0.0
-        moved = math.hypot(odo.x_m + cx - s.last_meet[0], odo.y_m + cy - s.last_meet[1])
         return ahead and moved >= (p.rejected_meet_m if s.rejected else p.new_meet_m)
 
     def _home(
@@ -725,6 +775,10 @@ class Tracer:
         if tangent is not None:
             back = math.atan2(-tangent[1], -tangent[0]) % TAU
             arrival = min(range(len(deps)), key=lambda k: _angdiff(deps[k], back))
+        way_in = self._way_in(odo) if p.unseen_way_in_rad > 0.0 else None
+        if way_in is not None and min(_angdiff(d, way_in) for d in deps) > p.unseen_way_in_rad:
+            deps = sorted((*deps, way_in))
+            arrival = deps.index(way_in)
         base = deps[arrival] if arrival is not None else 0.0
         rel = tuple(sorted((d - base) % TAU for d in deps))
         clearance = sum(o.distance_m for o in near) / len(near)
@@ -778,6 +832,17 @@ class Tracer:
         if n < 0.5 * p.approach_look_m:
             return tangent
         return dx / n, dy / n
+
+    def _way_in(self, odo: Odometry) -> float | None:
+        """The bearing (odometry frame) from here back along the traced way in to a point
+        ``way_in_m`` off, if the robot traced it lately; None if not."""
+        p = self.p
+        for d, x, y in reversed(self.s.trail):
+            if odo.distance_m - d > 2.5 * p.way_in_m:
+                return None
+            if math.hypot(x - odo.x_m, y - odo.y_m) >= p.way_in_m:
+                return math.atan2(y - odo.y_m, x - odo.x_m) % TAU
+        return None
 
     def _approach(self, odo: Odometry) -> tuple[float, float, float, float] | None:
         """Where homing onto this meet point began, if it began close enough to count."""
