@@ -114,6 +114,12 @@ class ExplorerParams:
     # ... and within this much, having driven no further off it, nothing was disturbed (0:
     # every excursion makes the edge's length a bound only).
     blip_m: float = 0.3
+    # A port this reading does not show (merged with another, or a room's door the sweep
+    # cannot resolve from its meet point, known by the way in) is left by its own bearing,
+    # straight on up to this far until the edge's two obstacles straddle the way: from
+    # office:1's meet point 94, 2.9 m from the door, the ring heard one jamb dead ahead and a
+    # side wall, and the robot traced them at the tracer's 1.5 m, back into the room.
+    own_bearing_until_sides_m: float = 3.5
     # Homed back onto the point just left (the edge could not be held near the junction):
     # recognised by dead reckoning, which is good over a metre, and retried once.
     bounce_m: float = 0.2
@@ -386,7 +392,7 @@ class Explorer:
             return Twist(), []
         twist, events = self.tracer.step(scan, odo, status, now_s)
         if self._depart_along is not None:
-            self.tracer.depart(self._depart_along, odo)
+            self.tracer.depart(self._depart_along, odo, self.p.own_bearing_until_sides_m)
             self._depart_along = None
         self._watch_detour(odo)
         if self.leaving is not None:
@@ -443,7 +449,10 @@ class Explorer:
         self.held = self.done = False
         self._leave(node, port)
         along = self._departure_bearing(ev, node, pm, port)
-        self.tracer.depart(ev.departures_rad[pm.index[port]] if along is None else along, self._odo)
+        if along is None:
+            self.tracer.depart(ev.departures_rad[pm.index[port]], self._odo)
+        else:
+            self.tracer.depart(along, self._odo, self.p.own_bearing_until_sides_m)
 
     def _departure_bearing(
         self, ev: MeetPointReached, node: int, pm: PortMap, port: int

@@ -175,6 +175,7 @@ class TracerParams:
     depart_until_sides_m: float = 1.5
     sides_cycles: int = 5  # ... seen so in this many control cycles running
     sides_along_rad: float = math.radians(45.0)  # ... their edge this close to the way
+    sides_ahead_rad: float = math.radians(15.0)  # ... neither this close to it (0: off)
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     # ... unless it was on one this recently: it coasts. Distance to an obstacle cannot jump
@@ -189,6 +190,13 @@ class TracerParams:
     # the pair is lost so, the jambs the view between keeps apart go on as the pair.
     doorway_pairs: bool = True
     arm_on_access: bool = True  # see Behaviour.ACCESS in ``_law``
+    # An edge turns gradually; a tangent that swings this far from the last in one cycle is
+    # a new pair of obstacles, not the edge: in office:1's 5.8 m room one side wall fell
+    # silent for 2 s, the side wall and the far wall behind made the pair, and the robot
+    # spun round and went back the way it came. Such a swing is coasted through on the last
+    # command for up to ``swing_coast_s`` (0: never).
+    swing_rad: float = math.radians(45.0)
+    swing_coast_s: float = 0.0
     # An edge's length drops the points its chain goes out to and comes back from, at this
     # ratio of chords (edgelength.py; inf: none dropped, as up to stop 30).
     edge_spike_ratio: float = 1.5
@@ -301,6 +309,9 @@ class _State:
     # onto another of its edges a moment before homing starts.
     trail: deque[tuple[float, float, float]] = field(default_factory=lambda: deque(maxlen=64))
     last_seen: float = 0.0
+    until_sides_m: float = 0.0  # this departure's depart_until_sides_m
+    swung_at: float | None = None  # when the trace law's tangent swung off the course
+    traced_at: float = -math.inf  # the last cycle the trace law set the tangent
     last_paired: float = -math.inf  # when the trace last had its two obstacles within off_edge_m
     # The edge's length: its own, not the weaving path's, and homing's wander left out (a
     # noisy third echo pulls the circumcentre about): see edgelength.py.
@@ -505,6 +516,16 @@ class Tracer:
         if out is None:
             return s.last_twist
         v, t = out
+        tracing = now - s.traced_at <= 0.5  # the last tangent is this edge's, not a start's
+        s.traced_at = now
+        if p.swing_coast_s > 0.0 and prev is not None and tracing:
+            if t[0] * prev[0] + t[1] * prev[1] < math.cos(p.swing_rad):
+                if s.swung_at is None:
+                    s.swung_at = now
+                if now - s.swung_at <= p.swing_coast_s:
+                    return s.last_twist
+            else:
+                s.swung_at = None
         s.tangent = _to_odom(t, odo)
         step = laws.step_onto_edge(o1, o2)
         if step is not None:
@@ -851,10 +872,16 @@ class Tracer:
             return None
         return a
 
-    def depart(self, direction_rad: float, odo: Odometry) -> None:
+    def depart(
+        self, direction_rad: float, odo: Odometry, until_sides_m: float | None = None
+    ) -> None:
         """Leave the meet point the robot stands at along ``direction_rad`` (odometry frame):
-        for an arbiter that held the robot there and has since decided where to go."""
+        for an arbiter that held the robot there and has since decided where to go. Going on
+        straight until the edge's two obstacles straddle the way, up to ``until_sides_m``
+        (None: ``depart_until_sides_m``)."""
         self._start_depart(direction_rad, odo)
+        if until_sides_m is not None:
+            self.s.until_sides_m = until_sides_m
 
     def _start_depart(self, direction: float, odo: Odometry, distance: float | None = None) -> None:
         s = self.s
@@ -866,6 +893,7 @@ class Tracer:
         s.armed = False
         s.depart_m = self.p.depart_m if distance is None else distance
         s.sides_seen = -1
+        s.until_sides_m = self.p.depart_until_sides_m
         s.approach = None
 
     def _depart(self, obs: list[Obstacle], odo: Odometry) -> tuple[float, float] | Twist | None:
@@ -889,7 +917,7 @@ class Tracer:
         wall, not through the door. Going on straight until the pair straddles the way (the
         jambs a few decimetres off are far apart in bearing) takes the robot into the door."""
         p = self.p
-        if gone >= p.depart_until_sides_m or len(obs) < 2:
+        if gone >= self.s.until_sides_m or len(obs) < 2:
             return True
         if obs[0].distance_m < p.boundary_clearance_m + 0.1:
             return True  # something close ahead: the trace law and its boundary rule decide
@@ -901,7 +929,12 @@ class Tracer:
         along = t is not None and t[0] * way[0] + t[1] * way[1] >= math.cos(p.sides_along_rad)
         # The ring glimpses the far jamb now and then before it holds it: a glimpse
         # traced from is the jamb-and-wall edge again a cycle later.
-        ok = along and (a > 0.0) != (b > 0.0)
+        # And neither lies dead ahead: that is what the robot is driving at, not a side. Out
+        # of office:1's room toward its door, 2.4 m off, the ring merged the jambs into one
+        # obstacle 6 degrees off the way, paired it with a side wall, and traced into the
+        # room's corner.
+        ahead = min(abs(a), abs(b)) < p.sides_ahead_rad
+        ok = along and (a > 0.0) != (b > 0.0) and not ahead
         if self.s.sides_seen < 0 and ok:
             return True  # as almost everywhere: the pair is there at ``depart_m``
         self.s.sides_seen = self.s.sides_seen + 1 if ok else 0
