@@ -120,6 +120,12 @@ class ExplorerParams:
     # office:1's meet point 94, 2.9 m from the door, the ring heard one jamb dead ahead and a
     # side wall, and the robot traced them at the tracer's 1.5 m, back into the room.
     own_bearing_until_sides_m: float = 3.5
+    # An excursion straight on along the course (within ``straight_rad`` of it, driving at
+    # most ``straight_slack_m`` more than the gap) is on the same edge up to this far (0:
+    # only ``rejoin_m``).
+    straight_rejoin_m: float = 0.0
+    straight_rad: float = math.radians(20.0)
+    straight_slack_m: float = 0.2
     # Homed back onto the point just left (the edge could not be held near the junction):
     # recognised by dead reckoning, which is good over a metre, and retried once.
     bounce_m: float = 0.2
@@ -347,6 +353,7 @@ class Explorer:
         # ports share (``_departure_bearing``).
         self.port_bearings: dict[int, tuple[float, ...]] = {}
         self._depart_along: float | None = None
+        self._detour_course: tuple[float, float] | None = None  # the tangent as it began
         self._now = 0.0
         self._odo: Odometry | None = None
         self.paths = EdgePaths()
@@ -499,6 +506,7 @@ class Explorer:
                 self._detour_from = (
                     odo.x_m, odo.y_m, odo.distance_m, self.detoured, self.disturbed
                 )  # fmt: skip
+                self._detour_course = self.tracer.s.tangent
             self.detoured = self.disturbed = True
         elif self._detour_from is not None:
             # Back on the graph: tracing, or already past it within the same control cycle
@@ -514,6 +522,7 @@ class Explorer:
             # After a long one the length says nothing any more: the robot does not know
             # where it came from.
             short = gap <= self.p.rejoin_m and driven - gap <= self.p.rejoin_drive_m
+            short = short or self._straight_on(odo.x_m - x, odo.y_m - y, gap, driven)
             self.wandered_m += driven
             if short and not off_already:
                 self.detoured = False
@@ -524,6 +533,18 @@ class Explorer:
                 # fig12's long edges had a blip) left their arrivals unchecked by length.
                 self.disturbed = disturbed_already
             self._detour_from = None
+
+    def _straight_on(self, dx: float, dy: float, gap: float, driven: float) -> bool:
+        """Whether an excursion went straight on along the course the robot was tracing:
+        accessing away from a doorway's jambs behind, the ring having merged them, the
+        robot goes on down the edge they define (office:1 seed 2: 1.9 m to the room's meet
+        point), and the edge is the one it was on."""
+        t, p = self._detour_course, self.p
+        if t is None or gap > p.straight_rejoin_m or gap < p.blip_m:
+            return False
+        if driven > gap + p.straight_slack_m:
+            return False
+        return (dx * t[0] + dy * t[1]) / gap >= math.cos(p.straight_rad)
 
     def unexplored(self) -> list[tuple[int, int]]:
         """Departures still to explore (those frozen by an ambiguity are left out)."""
