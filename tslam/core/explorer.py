@@ -123,7 +123,7 @@ class ExplorerParams:
     # An excursion straight on along the course (within ``straight_rad`` of it, driving at
     # most ``straight_slack_m`` more than the gap) is on the same edge up to this far (0:
     # only ``rejoin_m``).
-    straight_rejoin_m: float = 0.0
+    straight_rejoin_m: float = 3.0
     straight_rad: float = math.radians(20.0)
     straight_slack_m: float = 0.2
     # Homed back onto the point just left (the edge could not be held near the junction):

@@ -175,7 +175,7 @@ class TracerParams:
     depart_until_sides_m: float = 1.5
     sides_cycles: int = 5  # ... seen so in this many control cycles running
     sides_along_rad: float = math.radians(45.0)  # ... their edge this close to the way
-    sides_ahead_rad: float = math.radians(15.0)  # ... neither this close to it (0: off)
+    sides_ahead_rad: float = math.radians(30.0)  # ... neither this close to it (0: off)
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     # ... unless it was on one this recently: it coasts. Distance to an obstacle cannot jump
@@ -196,7 +196,7 @@ class TracerParams:
     # spun round and went back the way it came. Such a swing is coasted through on the last
     # command for up to ``swing_coast_s`` (0: never).
     swing_rad: float = math.radians(45.0)
-    swing_coast_s: float = 0.0
+    swing_coast_s: float = 1.5
     # An edge's length drops the points its chain goes out to and comes back from, at this
     # ratio of chords (edgelength.py; inf: none dropped, as up to stop 30).
     edge_spike_ratio: float = 1.5
@@ -438,13 +438,17 @@ class Tracer:
                 prev = _to_robot(s.tangent, odo) if s.tangent else (1.0, 0.0)
                 t = laws.edge_tangent(obs[0], obs[1], prev)
                 if t is not None:
-                    s.tangent = _to_odom(t, odo)
+                    course, s.tangent = s.tangent, _to_odom(t, odo)
                     s.behaviour = Behaviour.TRACE
-                    # Re-accessed beside a meet point other than the last (off the graph
-                    # where a room's door went out of hearing, office:1's 94 lay 0.75 m on),
-                    # the three stand equidistant already: armed, or it is passed unhomed.
+                    # Re-accessed straight on beside a meet point other than the last (off
+                    # the graph where a room's door went out of hearing, office:1's 94 lay
+                    # 0.75 m on), the three stand equidistant already: armed, or it is
+                    # passed unhomed. Not after turning back: fig12's robot, over m0 and
+                    # back, homed onto it naming the edge it had overshot along.
                     s.armed = not laws.equidistant(obs, 3, p.arm_tol_m) or (
-                        p.arm_on_access and self._new_meet_ahead(obs, odo, anywhere=True)
+                        p.arm_on_access
+                        and self._accessed_straight_on(odo, course)
+                        and self._new_meet_ahead(obs, odo, anywhere=True)
                     )
                     return self._law(obs, odo, now, events)
             v = laws.access_velocity(obs, p.access_mps)
@@ -533,6 +537,18 @@ class Tracer:
         if not s.trail or odo.distance_m - s.trail[-1][0] >= 0.02:
             s.trail.append((odo.distance_m, odo.x_m, odo.y_m))
         return v
+
+    def _accessed_straight_on(self, odo: Odometry, course: tuple[float, float] | None) -> bool:
+        """Whether the robot, accessing since it last traced along ``course``, went on the
+        way it traced."""
+        if not self.s.trail or course is None:
+            return False
+        _, x, y = self.s.trail[-1]
+        dx, dy = odo.x_m - x, odo.y_m - y
+        gone = math.hypot(dx, dy)
+        return gone >= 0.3 and dx * course[0] + dy * course[1] >= gone * math.cos(
+            math.radians(30.0)
+        )
 
     def _doorway(self, obs: list[Obstacle]) -> list[Obstacle]:
         """``obs`` with a doorway's jambs two obstacles again, if that puts the robot on an
@@ -800,6 +816,7 @@ class Tracer:
         if way_in is not None and min(_angdiff(d, way_in) for d in deps) > p.unseen_way_in_rad:
             deps = sorted((*deps, way_in))
             arrival = deps.index(way_in)
+
         base = deps[arrival] if arrival is not None else 0.0
         rel = tuple(sorted((d - base) % TAU for d in deps))
         clearance = sum(o.distance_m for o in near) / len(near)
