@@ -214,6 +214,6 @@ def test_a_departure_read_merged_with_another_is_left_by_its_own_bearing():
     # The tracer set off by the reading's departure; the explorer's next step turns it.
     departed: list[float] = []
     ex.tracer.step = lambda *_: (Twist(), [])
-    ex.tracer.depart = lambda rad, odo: departed.append(math.degrees(rad))
+    ex.tracer.depart = lambda rad, odo, *_: departed.append(math.degrees(rad))
     ex.step(None, ex._odo, None, 1.0)
     assert departed == [pytest.approx(3.0, abs=0.05)] and ex._depart_along is None

@@ -5,9 +5,11 @@ refused, however well the topology fits (a generated grid maze repeats itself)."
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from hal.interfaces import NOMAD200_LIMITS
 from hal.types import Odometry
+from tests.tracer_paths import STOP41, explorer_before_stop42
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
 from tslam.core.stands import Stands
@@ -43,12 +45,15 @@ def test_a_block_of_a_grid_maze_is_not_merged_onto_its_look_alike_17_m_away():
     first six, alike in topology, edge lengths and angles, were proven onto them by three
     edges and two dead ends at 928 s (loop closed: 19=1, ..., 25=6). Dead reckoning put them
     17 m apart after 69 m driven."""
-    run = explore("maze:4", 1, "paper", duration_s=1000.0, progress=False)
+    found = explorer_before_stop42(ExplorerParams())
+    run = explore("maze:4", 1, "paper", duration_s=1000.0, progress=False, params=found,
+                  tracer_params=STOP41)  # fmt: skip
     assert any("apart by dead reckoning" in n.text for n in run.explorer.notes)
     assert report(run, "maze:4", 1, "paper")["false_merges"] == 0
     # The scenario needs the rule: without it the block is merged.
-    params = ExplorerParams(drift_rel=10.0)
-    blind = explore("maze:4", 1, "paper", duration_s=1000.0, progress=False, params=params)
+    params = replace(found, drift_rel=10.0)
+    blind = explore("maze:4", 1, "paper", duration_s=1000.0, progress=False, params=params,
+                    tracer_params=STOP41)  # fmt: skip
     assert report(blind, "maze:4", 1, "paper")["false_merges"] > 0
 
 
@@ -93,8 +98,11 @@ def test_maze5_severe_seed5_false_merge_is_refuted_by_the_chained_bound():
     """Six places ~10 m from their look-alikes after 67-100 m driven: inside the bound over
     the metres between the last stands (the default still merges them), beyond it over the
     chain of 25-41 m that joins them (``drift_chain``, off until it allows for heading)."""
-    params = ExplorerParams(drift_chain=True)
-    run = explore("maze:5", 5, "severe", duration_s=2500.0, progress=False, params=params)
+    found = explorer_before_stop42(ExplorerParams())
+    params = replace(found, drift_chain=True)
+    run = explore("maze:5", 5, "severe", duration_s=2500.0, progress=False, params=params,
+                  tracer_params=STOP41)  # fmt: skip
     assert report(run, "maze:5", 5, "severe")["false_merges"] == 0
-    blind = explore("maze:5", 5, "severe", duration_s=2500.0, progress=False)
+    blind = explore("maze:5", 5, "severe", duration_s=2500.0, progress=False, params=found,
+                    tracer_params=STOP41)  # fmt: skip
     assert report(blind, "maze:5", 5, "severe")["false_merges"] > 0

@@ -10,6 +10,7 @@ import pytest
 
 from hal.interfaces import NOMAD200_LIMITS
 from hal.types import DriveStatus, Odometry, SonarScan
+from tests.tracer_paths import STOP41
 from tslam.core.tracer import Behaviour, Tracer, TracerParams
 from tslam.programs.sim_cmd import explore
 
@@ -136,5 +137,5 @@ def test_a_contact_while_tracing_arms_the_boundary_rule_again(before, armed):
 
 
 def test_fig16_seed_7_touches_the_indent_once():
-    run = explore("fig16", 7, "paper", duration_s=150.0, progress=False)
+    run = explore("fig16", 7, "paper", duration_s=150.0, progress=False, tracer_params=STOP41)
     assert run.backend.robot.collisions == 1

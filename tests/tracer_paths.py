@@ -11,14 +11,41 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+from tslam.core.explorer import ExplorerParams
 from tslam.core.tracer import TracerParams
+
+
+def before_stop42(params: TracerParams) -> TracerParams:
+    """``params`` as up to stop 41: no doorway's jambs kept apart as the edge's pair, no
+    arming on access, no way in kept as an edge of its own, a departure's pair may have one
+    obstacle dead ahead, and no swing of the trace law's tangent coasted through."""
+    return replace(
+        params,
+        doorway_pairs=False,
+        arm_on_access=False,
+        unseen_way_in_rad=0.0,
+        sides_ahead_rad=0.0,
+        swing_coast_s=0.0,
+    )
+
+
+def explorer_before_stop42(params: ExplorerParams) -> ExplorerParams:
+    """``params`` as up to stop 41: an excursion straight on along the edge keeps it only
+    within ``rejoin_m``, and a port left by its own bearing goes on straight as any other."""
+    return replace(params, straight_rejoin_m=0.0, own_bearing_until_sides_m=1.5)
+
+
+#: Stop 41's tracer, for runs a test was found with.
+STOP41 = before_stop42(TracerParams())
 
 
 def before_stop38(params: TracerParams) -> TracerParams:
     """``params`` as up to stop 37: no convex corner's echo kept while it lies in a gap
     between the beams (``SensingParams.gap_hold_s``), and homing on the ring's three nearest
-    however far apart their distances (``home_spread_m``)."""
-    return replace(params, home_spread_m=0.0, sensing=replace(params.sensing, gap_hold_s=0.0))
+    however far apart their distances (``home_spread_m``); and as ``before_stop42``."""
+    return before_stop42(
+        replace(params, home_spread_m=0.0, sensing=replace(params.sensing, gap_hold_s=0.0))
+    )
 
 
 def giving_up(params: TracerParams) -> TracerParams:
