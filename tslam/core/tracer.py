@@ -175,7 +175,7 @@ class TracerParams:
     depart_until_sides_m: float = 1.5
     sides_cycles: int = 5  # ... seen so in this many control cycles running
     sides_along_rad: float = math.radians(45.0)  # ... their edge this close to the way
-    sides_ahead_rad: float = math.radians(30.0)  # ... neither this close to it (0: off)
+    sides_ahead_rad: float = math.radians(15.0)  # ... neither this close to it (0: off)
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     # ... unless it was on one this recently: it coasts. Distance to an obstacle cannot jump
