@@ -212,8 +212,11 @@ def test_a_departure_read_merged_with_another_is_left_by_its_own_bearing():
     assert math.degrees(ex._depart_along) == pytest.approx(3.0, abs=0.05)
     assert ex.notes[-1].text == "node 1: departure 0 read merged with another; left by its own"
     # The tracer set off by the reading's departure; the explorer's next step turns it.
-    departed: list[float] = []
+    # It goes on straight further than from a departure it sees (the way out of a room by a
+    # door the sweep does not show: tests/test_tracer_depart_swing.py).
+    departed: list[tuple[float, float | None]] = []
     ex.tracer.step = lambda *_: (Twist(), [])
-    ex.tracer.depart = lambda rad, odo, *_: departed.append(math.degrees(rad))
+    ex.tracer.depart = lambda rad, odo, until=None: departed.append((math.degrees(rad), until))
     ex.step(None, ex._odo, None, 1.0)
-    assert departed == [pytest.approx(3.0, abs=0.05)] and ex._depart_along is None
+    assert departed == [(pytest.approx(3.0, abs=0.05), ex.p.own_bearing_until_sides_m)]
+    assert ex._depart_along is None

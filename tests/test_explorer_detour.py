@@ -332,3 +332,25 @@ def test_the_point_just_left_read_again_with_more_edges_a_hop_on_is_its_place(pl
         assert ex.notes[-1].text == f"node {node} read again as its place, with 4 edges"
         assert place.ports[3] == edge and ex.map.edge(edge).other_end(down, 1) == (node, 3)
         assert ex.map.unexplored()[:3] == [(node, 0), (node, 1), (node, 2)]
+
+
+@pytest.mark.parametrize(
+    ("back_at", "straight_rejoin_m", "detoured"),
+    [
+        ((1.9, 0.05), 3.0, False),  # straight on down the edge: the same edge
+        ((1.9, 0.05), 0.0, True),  # ... as up to stop 41: lost, 0.9 m beyond rejoin_m
+        ((-1.9, 0.0), 3.0, True),  # back the way it came: not on along this edge
+        ((1.65, 0.95), 3.0, True),  # 30 degrees off the course
+        ((3.4, 0.0), 3.0, True),  # straight on, but too far for dead reckoning to say
+    ],
+)
+def test_an_excursion_straight_on_along_the_course_keeps_the_edge(
+    back_at, straight_rejoin_m, detoured
+):
+    """office:1 seed 2: past a room's door the ring merged the jambs behind into one
+    obstacle, and the robot accessed away from it straight down the edge they define, 1.9 m
+    to the room's meet point; the explorer took it for lost and started a new fragment."""
+    ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(straight_rejoin_m=straight_rejoin_m))
+    ex.tracer.s.tangent = (1.0, 0.0)  # the course as the excursion began
+    _excursion(ex, math.hypot(*back_at) + 0.05, back_at)
+    assert ex.detoured is detoured

@@ -1,0 +1,109 @@
+"""Two tracer rules on obstacles given directly (the ring's sensing stubbed out):
+
+- a departure's pair "straddles the way" only with neither obstacle dead ahead: out of
+  office:1's room toward its door, the ring merged the jambs into one obstacle 6 degrees off
+  the way, paired it with a side wall on the other side, and the robot traced them into the
+  room's corner (``sides_ahead_rad``); and a port the explorer leaves by its own bearing goes
+  on straight up to ``until_sides_m`` (``ExplorerParams.own_bearing_until_sides_m``);
+- a swing of the trace law's tangent of more than 45 degrees in one cycle is a new pair of
+  obstacles, not the edge, and is coasted through for ``swing_coast_s``: in office:1's 5.8 m
+  room one side wall fell silent for 2 s and the robot spun round (``swing_coast_s``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from hal.interfaces import NOMAD200_LIMITS
+from hal.types import DriveStatus, Odometry
+from tslam.core import laws
+from tslam.core.sensing import Obstacle
+from tslam.core.tracer import Behaviour, Tracer, TracerParams
+
+FREE = DriveStatus(bumper=False, stall=False, motors_on=True, stamp_s=0.0)
+
+
+def _at(distance: float, bearing_deg: float) -> Obstacle:
+    b = math.radians(bearing_deg)
+    x, y = distance * math.cos(b), distance * math.sin(b)
+    return Obstacle(distance, x, y, -math.cos(b), -math.sin(b), b)
+
+
+class _Given:
+    """A sensor that reports the obstacles it is given."""
+
+    def __init__(self) -> None:
+        self.obs: list[Obstacle] = []
+        self.apart: list[Obstacle] = []
+        self.points = None
+
+    def update(self, scan, odo) -> list[Obstacle]:
+        self.apart = self.obs
+        return self.obs
+
+
+def _tracer(params: TracerParams) -> tuple[Tracer, _Given]:
+    tracer = Tracer(NOMAD200_LIMITS, params)
+    given = _Given()
+    tracer.sensor = given
+    return tracer, given
+
+
+def _odo(x: float, t: float) -> Odometry:
+    return Odometry(x, 0.0, 0.0, 0.0, t, distance_m=x)
+
+
+def test_a_pair_with_one_obstacle_dead_ahead_does_not_straddle_the_way():
+    # The jambs merged 2.4 m ahead, 6 degrees off the way; a side wall 2.8 m on the right.
+    pair = [_at(2.4, 6.0), _at(2.8, -84.0), _at(2.95, 96.0)]
+    for ahead_deg, departs_on in ((15.0, True), (0.0, False)):
+        tracer, given = _tracer(replace(TracerParams(), sides_ahead_rad=math.radians(ahead_deg)))
+        given.obs = pair
+        tracer.depart(0.0, _odo(0.0, 0.0))
+        tracer.step(None, _odo(0.5, 1.0), FREE, 1.0)
+        assert (tracer.behaviour is Behaviour.DEPART) is departs_on, ahead_deg
+
+
+def test_a_port_left_by_its_own_bearing_goes_on_straight_further():
+    # Nothing straddles the way: the jamb ahead and a wall on one side only.
+    for until, still_departing in ((3.5, True), (None, False)):
+        tracer, given = _tracer(TracerParams())
+        given.obs = [_at(2.0, 5.0), _at(2.8, -84.0)]
+        tracer.depart(0.0, _odo(0.0, 0.0), until_sides_m=until)
+        tracer.step(None, _odo(2.0, 10.0), FREE, 10.0)  # past depart_until_sides_m, 1.5 m
+        assert (tracer.behaviour is Behaviour.DEPART) is still_departing, until
+
+
+def _swing_run(params: TracerParams) -> list:
+    """Trace a 2 m corridor for a second, then lose the left wall: the right wall and a wall
+    behind pair up for 2 s, then the left wall is back. The commands of the lost stretch."""
+    tracer, given = _tracer(params)
+    tracer.s.behaviour = Behaviour.TRACE
+    tracer.s.tangent = (1.0, 0.0)
+    corridor = [_at(1.0, 90.0), _at(1.0, -90.0)]
+    swung = [_at(1.0, -90.0), _at(1.5, -150.0)]
+    out = []
+    for k in range(40):
+        t = 0.1 * k
+        given.obs = swung if 1.0 <= t < 3.0 else corridor
+        twist, _ = tracer.step(None, _odo(0.0, t), FREE, t)
+        if 1.0 <= t < 3.0:
+            out.append((t, twist))
+    return out
+
+
+def test_a_swing_of_the_tangent_is_coasted_through():
+    corridor, swung = (1.0, 0.0), laws.edge_tangent(_at(1.0, -90.0), _at(1.5, -150.0), (1.0, 0.0))
+    assert swung is not None and swung[0] < math.cos(math.radians(45.0))  # a swing indeed
+    coasting = _swing_run(TracerParams(swing_coast_s=1.5))
+    before = coasting[0][1]
+    assert before.v_mps > 0.0 and abs(before.steer_radps) < 1e-6  # straight on
+    held = [tw for t, tw in coasting if t <= 2.5 + 1e-9]
+    assert all(tw == before for tw in held)
+    # After swing_coast_s the new pair is taken: the robot turns.
+    assert any(abs(tw.steer_radps) > 0.05 for t, tw in coasting if t > 2.6)
+    # Without coasting it turns at once.
+    turning = _swing_run(TracerParams(swing_coast_s=0.0))
+    assert abs(turning[0][1].steer_radps) > 0.05 or turning[0][1] != before
+    assert corridor != swung
