@@ -76,9 +76,9 @@ def _into_the_room(params: TracerParams, seed: int):
 # rejoin_m; the jambs are kept apart up to some 2.2 m from the door, 28 degrees apart, and
 # the rest of the way the robot accesses straight on). Without doorway pairs it drove 1.4 to
 # 1.8 m off the graph, from 1.1 m past the door; without
-# arming on access it passed 94 unhomed in 4 (re-accessing at 94 itself, where the three
-# walls are equidistant already); without the unseen way in it read 3 edges, the way in
-# 40-47 degrees off the nearest, in all six.
+# arming on access it passed 94 unhomed in 2 (seeds 2 and 4: re-accessing at 94 itself,
+# where the three walls are equidistant already); without the unseen way in it read 3 edges,
+# the way in 40-47 degrees off the nearest, in all six.
 @pytest.mark.parametrize("seed", [1, 2, 4])
 def test_the_robot_homes_onto_the_rooms_meet_point_along_the_doors_edge_and_keeps_it(seed):
     off_graph_m, ev, at, way_in = _into_the_room(TracerParams(), seed)
@@ -95,7 +95,7 @@ def test_without_doorway_pairs_the_robot_leaves_the_graph_for_the_rest_of_the_ed
     assert off_graph_m > ExplorerParams().rejoin_m
 
 
-@pytest.mark.parametrize("seed", [2, 3])
+@pytest.mark.parametrize("seed", [2, 4])
 def test_without_arming_on_access_the_rooms_meet_point_is_passed(seed):
     _, _, at, _ = _into_the_room(replace(TracerParams(), arm_on_access=False), seed)
     assert math.dist(at, (13.2, 3.0)) < 0.3, at  # meet point 93, beyond 94

@@ -111,13 +111,13 @@ class SensingParams:
     # (9, other seeds). Off (0) until it shows better on the whole.
     bend_merge_rad: float = 0.0
     bend_ratio: float = 1.25
-    # Where a meet point is looked for and homed onto (``RingSensor.apart``), two minima closer
-    # than ``merge_rad`` stay two if an echo between them is this many times deeper than the
-    # farther: a doorway's jambs with the view through it between them, two obstacles at any
-    # angle, as the ground truth and the sweep have them. office:3's meet point 65 by a
-    # room's 1.2 m door, 1.9 m from both jambs and a wall, read its jambs 45 degrees apart as
-    # one obstacle and was never homed onto. The trace law keeps them one: kept apart there
-    # too, edges' lengths over the 60 traces met the target in 45 against 51 (0: one always).
+    # In a second reading of the minima (``RingSensor.apart``), two closer than ``merge_rad``
+    # stay two if an echo between them is this many times deeper than the farther: a
+    # doorway's jambs with the view through it between them, two obstacles at any angle, as
+    # the ground truth and the sweep have them. The tracer turns to it only where its pair is
+    # lost (TracerParams.doorway_pairs): in every reading, over the 60 traces the edge-length
+    # target was met in 45 against 51 (stop 41), and used for meet points, fig13's
+    # duplicates rose (README, stop 41). 0: one always.
     view_ratio: float = 1.4
     hold_s: float = 1.5  # keep an echo through one silent firing of its transducer
     # A convex corner answers only while it lies in some transducer's beam, and the beams,
@@ -151,7 +151,7 @@ class RingSensor:
         self._gap: np.ndarray | None = None  # kept echoes held because they lie in a gap
         self.points: np.ndarray | None = None  # the last update's echo points (robot frame)
         # The last update's obstacles with two close minima kept apart where the ring sees
-        # between them (``SensingParams.view_ratio``): what a meet point is looked for in.
+        # between them (``SensingParams.view_ratio``): a doorway's jambs.
         self.apart: list[Obstacle] = []
 
     def update(self, scan: SonarScan, odo: Odometry) -> list[Obstacle]:

@@ -633,27 +633,28 @@ class Tracer:
     def _new_meet_ahead(self, obs: list[Obstacle], odo: Odometry, anywhere: bool = False) -> bool:
         """Right after a meet point the three closest obstacles stay nearly equidistant; the
         robot is nearing another meet point only if their circumcentre has moved on, ahead
-        (or, ``anywhere``, within ``meet_radius_m`` and ``left_meet_m`` from the last)."""
+        (or, ``anywhere``, lies within ``meet_radius_m`` and at least ``left_meet_m`` from
+        the last meet point)."""
         s, p = self.s, self.p
-        if len(obs) < 3 or (s.last_meet is None and not anywhere):
-            return False
-        if s.tangent is None and not anywhere:
+        if len(obs) < 3 or (not anywhere and (s.last_meet is None or s.tangent is None)):
             return False
         c = laws.circumcentre(*obs[:3])
         if c is None:
             return False
         cx, cy = _to_odom(c, odo)
-        if anywhere and s.last_meet is None:
-            return math.hypot(cx, cy) <= p.meet_radius_m
-        last = s.last_meet
-        assert last is not None
-        moved = math.hypot(odo.x_m + cx - last[0], odo.y_m + cy - last[1])
+        far = p.rejected_meet_m if s.rejected else p.new_meet_m
         if anywhere:
-            return math.hypot(cx, cy) <= p.meet_radius_m and moved >= max(
-                p.left_meet_m, p.rejected_meet_m if s.rejected else p.new_meet_m
-            )
-        ahead = cx * s.tangent[0] + cy * s.tangent[1] > 0.0
-        return ahead and moved >= (p.rejected_meet_m if s.rejected else p.new_meet_m)
+            if math.hypot(cx, cy) > p.meet_radius_m:
+                return False
+            if s.last_meet is None:
+                return True
+            far = max(far, p.left_meet_m)
+        elif s.tangent is None or cx * s.tangent[0] + cy * s.tangent[1] <= 0.0:
+            return False  # not ahead
+        last = s.last_meet
+        if last is None:
+            return False
+        return math.hypot(odo.x_m + cx - last[0], odo.y_m + cy - last[1]) >= far
 
     def _home(
         self, obs: list[Obstacle], odo: Odometry, now: float, events: list[Event]
@@ -816,7 +817,6 @@ class Tracer:
         if way_in is not None and min(_angdiff(d, way_in) for d in deps) > p.unseen_way_in_rad:
             deps = sorted((*deps, way_in))
             arrival = deps.index(way_in)
-
         base = deps[arrival] if arrival is not None else 0.0
         rel = tuple(sorted((d - base) % TAU for d in deps))
         clearance = sum(o.distance_m for o in near) / len(near)
