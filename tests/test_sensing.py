@@ -223,7 +223,7 @@ def test_a_doorways_jambs_are_kept_apart_where_the_ring_sees_through_between_the
     assert len(near) == 1
     apart = [o for o in sensor.apart if o.distance_m < 2.0]
     assert [round(o.distance_m, 2) for o in apart] == [1.2, 1.22]
-    # A reading between that is not 1.4 times deeper (a bend's vertex) keeps them one.
+    # A reading between that is not 1.8 times deeper (a bend's vertex) keeps them one.
     r[4] = 1.6
     pts = ring_points(r)
     obs = sensor.update(scan, Odometry(0.1, 0.0, 0.0, 0.0, 0.0))

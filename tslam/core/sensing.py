@@ -117,8 +117,11 @@ class SensingParams:
     # the ground truth and the sweep have them. The tracer turns to it only where its pair is
     # lost (TracerParams.doorway_pairs): in every reading, over the 60 traces the edge-length
     # target was met in 45 against 51 (stop 41), and used for meet points, fig13's
-    # duplicates rose (README, stop 41). 0: one always.
-    view_ratio: float = 1.4
+    # duplicates rose (README, stop 41). 1.8, not 1.4: a right-angled corner's vertex is 1.41
+    # times as far as its walls, and at 1.4 the robot traced two faces of fig15's corners as a
+    # doorway's jambs into the corner, backing off and tracing in again (232 contacts in one
+    # run). 0: one always.
+    view_ratio: float = 1.8
     hold_s: float = 1.5  # keep an echo through one silent firing of its transducer
     # A convex corner answers only while it lies in some transducer's beam, and the beams,
     # fanned from a ring 0.23 m off the centre, leave gaps between them that widen as the
