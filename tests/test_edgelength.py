@@ -195,8 +195,8 @@ def test_an_edge_is_measured_between_the_meet_points_the_sweeps_estimate(monkeyp
     fig16 seed 2 at stop 31, on fig1 seed 1 at stop 36: the robot homed a few centimetres past
     the room's 2.03 m edge's end, 5.8 % against 1.8 %; with ``hold_on`` on, stop 37, that
     trace's worst edge is 3.0 % against 1.6 %, so fig16 seed 12, 12.8 % against 2.7 %; with
-    corners kept in the ring's gaps, stop 38, seed 12 traces two such edges; the tracer of
-    stop 41, as stop 42's traces three meet-to-meet edges there, not four.)"""
+    corners kept in the ring's gaps, stop 38, seed 12 traces two such edges; traced with
+    stop 41's tracer since stop 42, whose trace has three meet-to-meet edges there, not four.)"""
     _stop41(monkeypatch)
     report = _fig16_seed5_trace()
     assert report["meet_to_meet_edges"] >= 4
