@@ -153,9 +153,9 @@ class RingSensor:
         self._keep: tuple[np.ndarray, ...] | None = None
         self._gap: np.ndarray | None = None  # kept echoes held because they lie in a gap
         self.points: np.ndarray | None = None  # the last update's echo points (robot frame)
-        # The last update's obstacles with two close minima kept apart where the ring sees
-        # between them (``SensingParams.view_ratio``): a doorway's jambs.
-        self.apart: list[Obstacle] = []
+        # The last update's minima and distances, for ``apart`` (asked for now and then).
+        self._found: tuple[list[tuple[Obstacle, int, int]], np.ndarray] | None = None
+        self._merged = 0  # how many obstacles the last update reported
 
     def update(self, scan: SonarScan, odo: Odometry) -> list[Obstacle]:
         """Obstacles seen from the pose ``odo``, nearest first."""
@@ -163,20 +163,27 @@ class RingSensor:
         pts = self.echo_points(scan)
         self.points = pts
         p = self.p
-        found = _minima(pts, p.plateau_m)
+        self._found = found = _minima(pts, p.plateau_m)
         if found is None:
-            self.apart = []
+            self._merged = 0
             return []
         minima, d = found
         obs = _merge_split_walls(minima, d, p.merge_rad, p.bend_merge_rad, p.bend_ratio)
-        self.apart = obs
-        if p.view_ratio > 0.0:
-            apart = _merge_split_walls(
-                minima, d, p.merge_rad, p.bend_merge_rad, p.bend_ratio, p.view_ratio
-            )
-            if len(apart) > len(obs):
-                self.apart = apart
+        self._merged = len(obs)
         return obs
+
+    def apart(self) -> list[Obstacle] | None:
+        """The last update's obstacles with two close minima kept apart where the ring sees
+        between them (``SensingParams.view_ratio``: a doorway's jambs), nearest first; None
+        if that keeps none apart."""
+        p = self.p
+        if self._found is None or p.view_ratio <= 0.0:
+            return None
+        minima, d = self._found
+        obs = _merge_split_walls(
+            minima, d, p.merge_rad, p.bend_merge_rad, p.bend_ratio, p.view_ratio
+        )
+        return obs if len(obs) > self._merged else None
 
     def _held_echoes(self, scan: SonarScan) -> tuple[np.ndarray, ...]:
         """The latest echo of each transducer, kept through a silent firing for ``hold_s``:

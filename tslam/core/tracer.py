@@ -344,7 +344,6 @@ class Tracer:
         self.s = _State()
         self.s.odometer.detour_ratio = self.p.edge_spike_ratio
         self.obstacles: list[Obstacle] = []
-        self._apart: list[Obstacle] = []
         self._scan: SonarScan | None = None
 
     @property
@@ -354,12 +353,8 @@ class Tracer:
     def step(
         self, scan: SonarScan, odo: Odometry, status: DriveStatus, now_s: float
     ) -> tuple[Twist, list[Event]]:
-        raw = self.sensor.update(scan, odo)
-        obs = self._with_contacts(raw, odo, now_s)
+        obs = self._with_contacts(self.sensor.update(scan, odo), odo, now_s)
         self.obstacles = obs
-        # A doorway's jambs, kept apart by the view between them: the edge through it.
-        apart = self.sensor.apart
-        self._apart = obs if apart is raw else self._with_contacts(apart, odo, now_s)
         self._scan = scan
         events: list[Event] = []
         if (status.bumper or status.stall) and self.s.behaviour is not Behaviour.BACKOFF:
@@ -500,7 +495,7 @@ class Tracer:
             self._boundary(obs[0].distance_m, odo, now, events)
             return None
         if obs[1].distance_m - obs[0].distance_m > p.off_edge_m and p.doorway_pairs:
-            obs = self._doorway(obs)
+            obs = self._doorway(obs, odo, now)
         if obs[1].distance_m - obs[0].distance_m > p.off_edge_m:
             if now - s.last_paired <= p.off_edge_coast_s:
                 return s.last_twist
@@ -557,13 +552,14 @@ class Tracer:
             math.radians(30.0)
         )
 
-    def _doorway(self, obs: list[Obstacle]) -> list[Obstacle]:
+    def _doorway(self, obs: list[Obstacle], odo: Odometry, now: float) -> list[Obstacle]:
         """``obs`` with a doorway's jambs two obstacles again, if that puts the robot on an
         edge: the nearest two equidistant where the ring had merged them (``view_ratio``)."""
-        apart = self._apart
-        if len(apart) > len(obs) and (
-            apart[1].distance_m - apart[0].distance_m <= self.p.off_edge_m
-        ):
+        apart = self.sensor.apart()
+        if apart is None:
+            return obs
+        apart = self._with_contacts(apart, odo, now)
+        if apart[1].distance_m - apart[0].distance_m <= self.p.off_edge_m:
             return apart
         return obs
 
