@@ -326,9 +326,11 @@ class Explorer:
         self.detoured = False  # the tracer left the edge since, and did not rejoin it
         self.disturbed = False  # ... or left it and rejoined it: the length is only a bound
         self.wandered_m = 0.0  # ... the distance driven off the edge since (excursions)
-        # Where an excursion off the edge began: x, y, encoder distance, and the two flags
-        # above as they stood then.
-        self._detour_from: tuple[float, float, float, bool, bool] | None = None
+        # Where an excursion off the edge began: x, y, encoder distance, the two flags above
+        # as they stood then, and the tracer's tangent (the course it was on).
+        self._detour_from: (
+            tuple[float, float, float, bool, bool, tuple[float, float] | None] | None
+        ) = None
         self.partial_m = 0.0  # length before a weak meet point passed through
         self._through: int | None = None  # ... and the departure that goes on through it
         # The departure being left by, when the robot homed on the way at its place's other
@@ -353,7 +355,6 @@ class Explorer:
         # ports share (``_departure_bearing``).
         self.port_bearings: dict[int, tuple[float, ...]] = {}
         self._depart_along: float | None = None
-        self._detour_course: tuple[float, float] | None = None  # the tangent as it began
         self._now = 0.0
         self._odo: Odometry | None = None
         self.paths = EdgePaths()
@@ -504,9 +505,9 @@ class Explorer:
         if b in (Behaviour.ACCESS, Behaviour.BACKOFF):
             if self._detour_from is None:
                 self._detour_from = (
-                    odo.x_m, odo.y_m, odo.distance_m, self.detoured, self.disturbed
+                    odo.x_m, odo.y_m, odo.distance_m, self.detoured, self.disturbed,
+                    self.tracer.s.tangent,
                 )  # fmt: skip
-                self._detour_course = self.tracer.s.tangent
             self.detoured = self.disturbed = True
         elif self._detour_from is not None:
             # Back on the graph: tracing, or already past it within the same control cycle
@@ -514,7 +515,7 @@ class Explorer:
             # ahead, and the tracer is departing or homing by the time this runs). fig1 seed
             # 5 re-accessed 0.2 m short of a dead end's corner, and the corner, found in the
             # cycle tracing resumed, was mapped apart from the junction it was reached from.
-            x, y, d0, off_already, disturbed_already = self._detour_from
+            x, y, d0, off_already, disturbed_already, course = self._detour_from
             gap = math.hypot(odo.x_m - x, odo.y_m - y)
             driven = odo.distance_m - d0
             # Back on an edge close by after a short excursion that began on the edge: the
@@ -522,7 +523,7 @@ class Explorer:
             # After a long one the length says nothing any more: the robot does not know
             # where it came from.
             short = gap <= self.p.rejoin_m and driven - gap <= self.p.rejoin_drive_m
-            short = short or self._straight_on(odo.x_m - x, odo.y_m - y, gap, driven)
+            short = short or self._straight_on(course, odo.x_m - x, odo.y_m - y, driven)
             self.wandered_m += driven
             if short and not off_already:
                 self.detoured = False
@@ -534,12 +535,14 @@ class Explorer:
                 self.disturbed = disturbed_already
             self._detour_from = None
 
-    def _straight_on(self, dx: float, dy: float, gap: float, driven: float) -> bool:
-        """Whether an excursion went straight on along the course the robot was tracing:
-        accessing away from a doorway's jambs behind, the ring having merged them, the
-        robot goes on down the edge they define (office:1 seed 2: 1.9 m to the room's meet
-        point), and the edge is the one it was on."""
-        t, p = self._detour_course, self.p
+    def _straight_on(
+        self, course: tuple[float, float] | None, dx: float, dy: float, driven: float
+    ) -> bool:
+        """Whether an excursion by ``(dx, dy)`` went straight on along ``course``, the way the
+        robot was tracing: accessing away from a doorway's jambs behind, the ring having
+        merged them, the robot goes on down the edge they define (office:1 seed 2: 1.9 m to
+        the room's meet point), and the edge is the one it was on."""
+        t, p, gap = course, self.p, math.hypot(dx, dy)
         if t is None or gap > p.straight_rejoin_m or gap < p.blip_m:
             return False
         if driven > gap + p.straight_slack_m:
