@@ -1,0 +1,551 @@
+"""Which map node the robot has homed onto, and what that arrival says: the node expected at
+the end of a known edge, a new node (and the old ones it may be), a node it bounced back to.
+"""
+
+from __future__ import annotations
+
+import math
+
+from tslam.core.explorer_state import MAX_CUTS, ExplorerState, Past, angdiff, nearest
+from tslam.core.localize import Hypothesis, Prediction, arrival_matches, candidates, predict
+from tslam.core.portmap import PortMap
+from tslam.core.signature import Signature
+from tslam.core.tracer import MeetPointReached
+
+
+class Arrival(ExplorerState):
+    """Reading a meet-point arrival against the map."""
+
+    def _arrive(self, ev: MeetPointReached) -> tuple[int, PortMap]:
+        """Which map node the robot has homed onto, and which of the event's departures is
+        which of its ports."""
+        self._misread = None
+        node, rot = self._identify(ev)
+        if isinstance(rot, PortMap):
+            return node, rot
+        return node, PortMap.rotation(rot, ev.degree, ev.arrival_index)
+
+    def _identify(self, ev: MeetPointReached) -> tuple[int, int | PortMap]:
+        """The node, and the rotation (event index i is port ``(i + rot) % degree``) or, for
+        a junction read with another degree, the port map."""
+        a = ev.arrival_index
+        length = self._edge_length(ev.edge_length_m)
+        resuming, self._resuming = self._resuming, False
+        if self.leaving is None or self.detoured or a is None:
+            return self._lost(ev, "off the graph", resuming)
+        f, j = self.leaving
+        bounced = self._bounced(ev)
+        if bounced is not None:
+            return bounced
+        e = self.map.node(f).ports[j]
+        seen = self._seen(ev, a, f)
+        if e is not None:
+            return self._expected(ev, seen, f, j, e, length)
+        went = self._walked_to(ev, a, length, back=True)
+        if went is None:
+            went = self._went_otherwise(ev, a, f, j, length, known=False)
+        if went is not None:
+            return went
+        return self._new_edge(ev, seen, f, self._departure_taken(f, j), length)
+
+    def _bounced(self, ev: MeetPointReached) -> tuple[int, PortMap] | None:
+        lv, p = self._last_visit, self.p
+        if lv is None or self.leaving is None or ev.edge_length_m is None:
+            return None
+        node, deps, pm, x, y = lv
+        length = ev.edge_length_m
+        # Further out, a U-turn: back by the departure it left by, which dead reckoning,
+        # good over an edge (section V-C), places where it left (fig12 seed 2: 9.3 m out and
+        # back along its long edge, and the junction was mapped again).
+        far = length > p.bounce_length_m
+        reach = p.bounce_m + (p.bounce_rel * length if far else 0.0)
+        if node != self.leaving[0] or not self.map.has_node(node):
+            return None
+        moved = math.hypot(ev.x_m - x, ev.y_m - y)
+        if (
+            self.p.place_hop_same
+            and ev.degree == len(deps)
+            and p.bounce_m < moved
+            and max(length, moved) <= p.place_hop_m
+        ):
+            # The place's other point, read as the place again (fig16's weak meet point
+            # 0.36 m into the indent, read with the place's four edges as the corridor's
+            # meet point was): one node, its ports matched by absolute bearing.
+            return self._spans(node, moved, self._reread(ev, node, deps, pm, moved))
+        if ev.degree != len(deps):
+            if max(length, moved) > p.place_hop_m:
+                return None
+            if ev.degree > len(deps) and ev.degree >= self.map.node(node).degree:
+                placed = self._read_place(ev, node)
+                if placed is not None:
+                    return self._spans(node, moved, placed)
+            return self._spans(node, moved, self._reread(ev, node, deps, pm, moved))
+        if (far and length > p.bounce_far_m) or moved > reach:
+            return None
+
+        # Same place, seconds later: absolute bearings still agree, so they fix the rotation.
+        # A twin junction a few decimetres away has other bearings (one of its edges leads
+        # back to the point just left), which tells it from a bounce.
+        def misfit(k: int) -> float:
+            return max(
+                angdiff(ev.departures_rad[i], deps[(i + k) % ev.degree]) for i in range(ev.degree)
+            )
+
+        shift = min(range(ev.degree), key=misfit)
+        if misfit(shift) > p.bounce_angle_rad:
+            return None
+        key = self.leaving
+        pm = pm.shifted_events(shift, ev.degree)
+        a = ev.arrival_index
+        arrival = next((p for p, i in enumerate(pm.index) if i == a), None)
+        if far and arrival != key[1]:
+            return None  # round a loop, maybe: dead reckoning alone does not close loops
+        self._count_bounce(key)
+        self._note(f"back at node {node}: departure {key[1]} could not be held")
+        return node, PortMap(pm.index, arrival)
+
+    def _spans(
+        self, node: int, moved: float, found: tuple[int, PortMap] | None
+    ) -> tuple[int, PortMap] | None:
+        """``found`` as it is; if it is ``node``, read again ``moved`` off, the place spans
+        that much: an edge to it may end at either of its points (``_expected``)."""
+        if found is not None and found[0] == node and self.p.place_span_slack:
+            self.span[node] = max(self.span.get(node, 0.0), moved)
+        return found
+
+    def _reread(
+        self,
+        ev: MeetPointReached,
+        node: int,
+        deps: tuple[float, ...],
+        pm: PortMap,
+        moved: float = 0.0,
+    ) -> tuple[int, PortMap] | None:
+        """The junction just left, read again within ``place_hop_m`` with another number of
+        edges: the robot homed again, onto one point of a close pair it had read as their
+        place, or onto the place whose point it had read alone (when ``_read_place`` may not
+        make the node the place) (fig13 seed 1: its 0.29 m pair read with four edges, then
+        6 cm on with three, and mapped twice). The robot stands at the node; its ports are
+        matched to the departures by their absolute bearings, which a few seconds do not
+        turn. Also read so with the same degree (``place_hop_same``). ``moved``: how far
+        from where it was read last; further than ``bounce_m``, the robot is at the place's
+        other point, and may go on by the departure it was leaving by."""
+        now = ev.departures_rad
+        ports = [deps[i] for i in pm.index]
+        index = [nearest(b, now) for b in ports]
+        tol = self.p.bounce_angle_rad
+        agree = sum(angdiff(now[i], b) <= tol for i, b in zip(index, ports, strict=True))
+        if agree < min(ev.degree, len(ports)) - 1:
+            return None
+        key = self.leaving
+        assert key is not None
+        arrival = next((q for q, i in enumerate(index) if i == ev.arrival_index), None)
+        on = self.p.on_through_place and moved > self.p.bounce_m
+        if on and index[key[1]] != ev.arrival_index and self._on_by_count.get(key, 0) < 2:
+            # The departure leaves from here too, not by the way the robot came in: it homed
+            # at the place's other point on the way (fig16's weak meet point, 0.36 m into
+            # the indent from the corridor's), and no departure was lost. Twice at most for
+            # a departure: a robot sent back and forth between the two points is bouncing.
+            self._on_by = key
+            self._on_by_count[key] = self._on_by_count.get(key, 0) + 1
+            self._note(f"at node {node}'s other point, read with {ev.degree} edges: on by {key[1]}")
+            return node, PortMap(tuple(index), arrival)
+        self._count_bounce(key)
+        self._note(f"back at node {node}, read with {ev.degree} edges: departure {key[1]} not held")
+        return node, PortMap(tuple(index), arrival)
+
+    def _read_place(self, ev: MeetPointReached, node: int) -> tuple[int, PortMap] | None:
+        """The meet point just left, a few decimetres back, read with more edges from here:
+        the two are one place, and the node becomes the place (fig16 seed 3: the corridor's
+        meet point read alone with three edges, then the weak one 0.36 m on with the
+        place's four, mapped as a new node; the robot came back to the first and mapped it
+        again). Its explored ports move to the place's departures by absolute bearing; its
+        unexplored ones that match none led inside the place. Not while a hypothesis places
+        the node: its rotation would not survive the new ports."""
+        n = self.map.node(node)
+        now, tol = ev.departures_rad, self.p.bounce_angle_rad
+        carry: dict[int, int] = {}
+        for p, b in enumerate(n.departures_rad):
+            i = nearest(b, now)
+            if angdiff(now[i], b) <= tol and i not in carry.values():
+                carry[p] = i
+        explored = [p for p, e in enumerate(n.ports) if e is not None]
+        placed = any(
+            node in h.mapping or any(c == node for c, _ in h.mapping.values())
+            for h in self.hyps.live
+        )
+        if placed or len(carry) < n.degree - 1 or any(p not in carry for p in explored):
+            return None
+        self.map.reread(node, now, ev.clearance_m, carry)
+        if self._odo is not None:
+            self.born[node] = self._odo.distance_m
+        kept = {(x, p) for x, p in self.frozen if x != node or p in carry}
+        self.frozen = {(x, carry[p]) if x == node else (x, p) for x, p in kept}
+        self.bounces = {k: v for k, v in self.bounces.items() if k[0] != node}
+        self._note(f"node {node} read again as its place, with {ev.degree} edges")
+        return node, PortMap(tuple(range(ev.degree)), None)
+
+    def _expected(
+        self, ev: MeetPointReached, seen: Signature, f: int, j: int, e: int, length: float | None
+    ) -> tuple[int, int | PortMap]:
+        slack = self.p.estimate_slack_m if e in self.estimated else 0.0
+        edge = self.map.edge(e)
+        w, q = edge.other_end(f, j)
+        # A place read at both its points: the edge ends at one or the other.
+        slack += self.span.get(f, 0.0) + self.span.get(w, 0.0)
+        tol = self._tol(slack)
+        a = ev.arrival_index
+        assert a is not None
+        k = self._match(ev, seen, a, w, q, length, edge.length_m, slack)
+        back = k is None and self.map.node(f).kind == "boundary"
+        dead_end = back and self.map.node(w).degree == ev.degree
+        # None when no recent pass can say; a twin junction a few decimetres on has the same
+        # topology from a dead end.
+        left_here = self._where_the_pass_left(ev, f, e) if back else None
+        if dead_end and tol.length_ok(length, edge.length_m) and left_here is not False:
+            # Back from a dead end there is one place to arrive at; only the signature's
+            # noisier parts (clearance, a departure angle) disagree: trust the topology.
+            k = (q - a) % ev.degree
+            self._note(f"node {w} confirmed by topology alone (back from boundary {f})")
+        elif left_here and dead_end:
+            # One edge's length is off (the way in wandered at the corner), but the robot has
+            # homed where it left for the dead end minutes ago, by dead reckoning over a few
+            # metres: the same junction. The length is not recorded.
+            self._note(f"node {w} confirmed by dead reckoning (back from boundary {f})")
+            self.partial_m = 0.0
+            return w, (q - a) % ev.degree
+        elif left_here and (pm := self._read_where_left(ev, w, q)) is not None:
+            # The same, read with an edge more or fewer: back from fig13's boundary 16 the
+            # robot homed onto the other meet point of the 0.29 m pair it had read as one
+            # place, whose edge to the pair's first point came in 40 degrees off the dead
+            # end's, and the place went into the map twice (seed 1, switch hold_on).
+            self._note(
+                f"node {w} confirmed by dead reckoning (back from boundary {f}) although read "
+                f"with degree {ev.degree}, not {self.map.node(w).degree}"
+            )
+            self.partial_m = 0.0
+            self._misread = w
+            return w, pm
+        if k is not None:
+            if length is not None and not self.disturbed:
+                self.map.add_measurement(e, length)
+                self.estimated.discard(e)
+            self.partial_m = 0.0
+            return w, k
+        pm = self._read_otherwise(ev, w, q, length, edge.length_m, slack)
+        if pm is not None:
+            if length is not None and not self.disturbed:
+                self.map.add_measurement(e, length)
+            self.partial_m = 0.0
+            self._misread = w
+            self._note(
+                f"node {w} confirmed by edge {e} although read with degree {ev.degree}, "
+                f"not {self.map.node(w).degree}"
+            )
+            return w, pm
+        short = length is not None and length < edge.length_m - tol.length_abs_m
+        through = self._through_port(ev) if short else None
+        if short and not self.disturbed:
+            assert length is not None
+            split = None
+            if self.p.split_open or through is None:
+                split = self._missed_junction(ev, f, j, e, length)
+            room = edge.length_m - length >= self.p.split_rest_m  # else the far end itself
+            # Back from a dead end the way in was just traced: the pass says it, or nothing.
+            room = room and self.map.node(f).kind == "meet"
+            if split is None and room and self.p.split_open:
+                split = self._junction_on_edge(ev, f, j, e, length)
+            if split is not None:
+                return split
+        if through is not None:
+            # A weak meet point halfway (section VII-B): it did not show when the edge was
+            # first traced. Not a node of the map; the edge goes on straight ahead.
+            self.partial_m = length
+            self._through = through
+            self._note(f"weak meet point passed on edge {e} ({f}-{w})")
+            return f, 0
+        # Homed past a weak meet point: one edge further than planned (section V-B). The
+        # robot then came by w's edge, so the way back leads to w, whatever f is: back from
+        # a dead end it is a meet point (fig13 seed 1: past meet point 8 to 9, and lost).
+        found = []
+        seen_past = self._seen(ev, a, w)
+        for p, e2 in enumerate(self.map.node(w).ports):
+            if e2 is None or p == q:
+                continue
+            e2d = self.map.edge(e2)
+            w2, q2 = e2d.other_end(w, p)
+            k2 = self._match(ev, seen_past, a, w2, q2, length, edge.length_m + e2d.length_m)
+            if k2 is not None:
+                found.append((w2, k2))
+        if len(found) == 1:
+            self._note(f"expected node {w}, recognised node {found[0][0]} one edge further")
+            self.partial_m = 0.0
+            return found[0]
+        went_otherwise = self._went_otherwise(ev, a, f, j, length, known=True)
+        if went_otherwise is not None:
+            return went_otherwise
+        for back in (False, True):
+            went = self._walked_to(ev, a, length, back)
+            if went is not None:
+                return went
+        wn = self.map.node(w)
+        why = (
+            f"expected node {w} (degree {wn.degree}, clearance {wn.clearance_m:.2f} m) after "
+            f"edge {e} ({edge.length_m:.2f} m), found degree {ev.degree}, clearance "
+            f"{ev.clearance_m:.2f} m after {length or 0:.2f} m"
+        )
+        return self._lost(ev, why)
+
+    def _match(
+        self,
+        ev: MeetPointReached,
+        seen: Signature,
+        a: int,
+        w: int,
+        q: int,
+        length: float | None,
+        mapped: float,
+        slack_m: float = 0.0,
+    ) -> int | None:
+        """The rotation under which ``seen``, arrived at by index ``a``, is node ``w`` reached by
+        its port ``q`` after an edge of ``mapped`` metres; None if it is not. Nor is it if
+        that turns ``ev``'s departures further from ``w``'s than dead reckoning drifts: in
+        fig12, whose junctions' departures are about evenly spread, a robot that went the
+        wrong way round the triangle arrived along the other edge, after a length like the
+        planned one, and was taken for arriving as planned, its map turned a third of a turn
+        (seed 8). ``slack_m``: more slack on the length (``estimated``)."""
+        pred = Prediction(w, q, mapped, self.map.node(w).kind)
+        k = arrival_matches(self.map, seen, a, pred, length, self._tol(slack_m))
+        if k is None or self._odo is None:
+            return k
+        return k if self._turn_fits(ev.departures_rad, self._odo.distance_m, w, k) else None
+
+    def _new_edge(
+        self, ev: MeetPointReached, seen: Signature, f: int, j: int, length: float | None
+    ) -> tuple[int, int]:
+        a = ev.arrival_index
+        assert a is not None
+        tol = self._tol()
+        # What each open hypothesis predicted for this edge, checked before the map changes.
+        survivors: list[Hypothesis] = []
+        confirmed: list[tuple[Hypothesis, int, int]] = []
+        past: list[tuple[Hypothesis, tuple[int, int] | None]] = []
+        for h in self.hyps.live:
+            pred = predict(self.map, h, f, j)
+            if pred is None or self.unsure_departure:
+                survivors.append(h)
+                continue
+            k = arrival_matches(self.map, seen, a, pred, length, tol)
+            # Two new nodes cannot both be one old place: the fragment is a walk through
+            # places the robot had not seen since it left the map.
+            if k is not None and all(c != pred.node for c, _ in h.mapping.values()):
+                survivors.append(h)
+                confirmed.append((h, pred.node, k))
+            elif k is None and self.p.cut_past:
+                went = self._past_a_junction(h, pred, seen, a, length)
+                if went is not None:
+                    survivors.append(h)
+                    past.append((h, went.beyond))
+        node = self._add_meet(ev)
+        edge = self.map.connect(f, j, node, a, 0.0 if length is None else length)
+        lv = self._last_visit
+        if lv is not None and lv[0] == f:
+            self.edge_gap[edge] = math.hypot(ev.x_m - lv[3], ev.y_m - lv[4])
+        for h, w, k in confirmed:
+            h.mapping[node] = (w, k)
+            h.confirmed += 1
+        for h, went in past:
+            if went is None:  # the old edge went past this junction
+                pred = predict(self.map, h, f, j)
+                assert pred is not None and pred.edge is not None
+                h.cuts.add(pred.edge)
+            else:  # this edge went past the predicted node to the one beyond
+                h.cuts.add(edge)
+                h.mapping[node] = went
+        dropped = len(self.hyps.live) - len(survivors)
+        spoke = {id(h) for h, _, _ in confirmed} | {id(h) for h, _ in past}
+        self.hyps.live = self._age(survivors, spoke)
+        if self.hyps.live:
+            self.hyps.fragment.add(node)
+        # A node of the fragment that no open hypothesis places any more is a new place, as
+        # it would be had the fragment closed (``close_fragment``): a candidate like any. A
+        # fragment whose placement never settles, each new node bringing new look-alikes,
+        # otherwise goes round a loop of the building for ever without closing onto itself.
+        exclude = self.hyps.fragment | {node}
+        if self.p.close_fragment:
+            exclude = {x for h in self.hyps.live for x in h.mapping} & exclude | {node}
+        fresh = candidates(self.map, self.map.signature(node), tol, exclude, a)
+        # A look-alike some open hypothesis already maps this node to adds nothing: that
+        # hypothesis says the same and more, and has the evidence.
+        implied = {h.mapping[node] for h in self.hyps.live if node in h.mapping}
+        fresh = [ck for ck in fresh if ck not in implied]
+        crowd = self._crowd(node, fresh)
+        for c, k in fresh:
+            self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd))
+        slips = self._past_candidates(f, node, a, edge, length) if self.p.cut_past else []
+        slips = [(c, k, e) for c, k, e in slips if (c, k) not in implied]
+        for c, k, e in slips:
+            self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd, cuts={e}))
+        if fresh or slips:
+            self.hyps.fragment.add(node)
+        leads = self._lead_ins(f, j, node, a, length) if self.p.lead_ins else []
+        leads = [h for h in leads if h.mapping[node] not in implied]
+        for h in leads:
+            self.hyps.live.append(h)
+            self.hyps.fragment.add(node)
+        if dropped or fresh or leads or slips:
+            self._note(
+                f"node {node}: {len(fresh)} look-alike(s), "
+                + (f"{len(slips)} if an edge went past a junction, " if slips else "")
+                + (f"{len(leads)} if node {f} is mapped twice, " if leads else "")
+                + f"{dropped} hypothesis(es) refuted, {len(self.hyps.live)} open"
+            )
+        self.partial_m = 0.0
+        return node, 0
+
+    def _past_a_junction(
+        self, h: Hypothesis, pred: Prediction, seen: Signature, a: int, length: float | None
+    ) -> Past | None:
+        """A prediction that failed on its edge's length, explained by a junction passed
+        without homing (section VII-B's weak meet points, a third wall the ring does not
+        resolve): most wrong predictions of true hypotheses are that, and a refuted true
+        hypothesis leaves the fragment a copy for good. Shorter than the map's edge: that
+        edge went past the meet point just reached. Longer: this traversal went past the
+        predicted node, and reached the one beyond it that fits, alone, by signature and the
+        two edges' length. None if neither, or if ``h`` already says ``MAX_CUTS`` other edges
+        went past a junction: a repair or two is an explanation, more is a story.
+        """
+        if length is None or pred.edge is None:
+            return None
+        if len(h.cuts) >= MAX_CUTS and pred.edge not in h.cuts:
+            return None
+        tol = self._tol()
+        slack = tol.length_abs_m + tol.length_rel * pred.length_m
+        if length < pred.length_m - slack:
+            return Past(None)
+        if length <= pred.length_m + slack + (tol.wandered_m if tol.at_least else 0.0):
+            return None
+        if len(h.cuts) >= MAX_CUTS:
+            return None
+        w = self.map.node(pred.node)
+        if w.kind != "meet":
+            return None
+        beyond = []
+        for p, e2 in enumerate(w.ports):
+            if e2 is None or p == pred.arrival_port:
+                continue
+            edge2 = self.map.edge(e2)
+            w2, q2 = edge2.other_end(pred.node, p)
+            two = Prediction(w2, q2, pred.length_m + edge2.length_m, self.map.node(w2).kind)
+            k2 = arrival_matches(self.map, seen, a, two, length, tol)
+            if k2 is not None and all(c != w2 for c, _ in h.mapping.values()):
+                beyond.append((w2, k2))
+        return Past(beyond[0]) if len(beyond) == 1 else None
+
+    def _past_candidates(
+        self, f: int, node: int, a: int, edge: int, length: float | None
+    ) -> list[tuple[int, int, int]]:
+        """Old places the new ``node`` may be although the departure the robot came by is
+        explored there, by an edge whose length says one of the two went past a junction
+        without homing: (old node, rotation, the edge that went past). Longer than the
+        length just measured: the old edge went past ``f``, the meet point just left (fig13:
+        meet points 1 and 2 joined past meet point 0, which the robot then reached by its
+        third edge). Shorter: the edge just traced went past the old edge's far end. The
+        first tracing's look-alike is otherwise never a candidate, and the place is mapped
+        again, with copies of everything beyond it."""
+        if length is None or self.map.node(f).kind != "meet":
+            return []
+        tol = self._tol()
+        alike = candidates(
+            self.map, self.map.signature(node), tol, self.hyps.fragment | {node}, None
+        )
+        out = []
+        for c, k in alike:
+            pa = (a + k) % self.map.node(c).degree
+            e = self.map.node(c).ports[pa]
+            if e is None or e == edge or not self._heading_fits(node, c, k):
+                continue
+            old = self.map.edge(e)
+            slack = tol.length_abs_m + tol.length_rel * max(length, old.length_m)
+            if length < old.length_m - slack:
+                out.append((c, k, e))
+            elif length > old.length_m + slack:
+                far = old.other_end(c, pa)[0]
+                if self.map.node(far).kind == "meet":
+                    out.append((c, k, edge))
+        return out
+
+    def _crowd(self, node: int, fresh: list[tuple[int, int]]) -> int:
+        """How many old places ``node`` may be, for the odds of each: its candidates, or,
+        with ``crowd_all_ports``, every look-alike. A look-alike whose departure the robot
+        came by is explored is not a candidate: that edge would have brought the robot there.
+        But in a map that holds copies (a place mapped twice, the edge explored at one copy
+        and not the other) that is no proof, and counting the candidates alone undercounts:
+        fig1 seed 3 without drift, in a map of 193 nodes most of them copies, merged a room
+        3.5 m west onto its twin on one confirmation and two dead ends, the only candidate
+        of ten look-alikes."""
+        if not self.p.crowd_all_ports:
+            return len(fresh)
+        alike = candidates(
+            self.map, self.map.signature(node), self._tol(), self.hyps.fragment | {node}, None
+        )
+        return max(len(fresh), len(alike))
+
+    def _lead_ins(
+        self, f: int, j: int, node: int, a: int, length: float | None
+    ) -> list[Hypothesis]:
+        """Old places the new ``node`` may be although the edge that leads there is already
+        mapped: node ``f``, just left by its unexplored port ``j``, may be the same place as
+        an old node ``g`` whose port in that direction is explored, to ``c``. The robot, lost
+        once, mapped a place again (fig12 seed 5: node 7 beside node 2); from then on every
+        arrival by an edge only one of the two has explored is "new", since the old node
+        that leads there is never a candidate, and the copies multiply. So where ``f`` or
+        ``g`` had its look-alikes given up on (``doubtful``), the hypothesis maps ``f`` to
+        ``g`` and ``node`` to ``c``. The edge just traced is tested as a prediction would be,
+        but counts for nothing: the merge needs the usual proof from edges still to come.
+        Two old places become one only if dead reckoning's heading fits both pairs, so
+        without odometry (a mirror image in fig15 fits everything else) there are none."""
+        if self.map.node(f).kind != "meet" or node not in self.born:
+            return []
+        tol = self._tol()
+        seen = self.map.signature(node)
+        taken = self.hyps.fragment | {f, node}
+        out: list[tuple[int, int, int, int]] = []
+        for g, kf in candidates(self.map, self.map.signature(f), tol, taken, None):
+            pg = (j + kf) % self.map.node(g).degree
+            e = self.map.node(g).ports[pg]
+            if e is None or not {f, g} <= self.born.keys() or not {f, g} & self.doubtful:
+                continue
+            if not self._heading_fits(f, g, kf):
+                continue
+            edge = self.map.edge(e)
+            c, q = edge.other_end(g, pg)
+            if c in taken or self.map.node(c).kind != "meet" or c not in self.born:
+                continue
+            pred = Prediction(c, q, edge.length_m, "meet")
+            k = arrival_matches(self.map, seen, a, pred, length, tol)
+            if k is not None and self._heading_fits(node, c, k):
+                out.append((g, kf, c, k))
+        crowd = max(len(out), self._crowd(node, []))
+        return [Hypothesis({f: (g, kf), node: (c, k)}, crowd=crowd) for g, kf, c, k in out]
+
+    def _lost(self, ev: MeetPointReached, why: str, resuming: bool = False) -> tuple[int, int]:
+        """Not knowing where the robot came from, the node goes in unattached and every old
+        node that looks like it is a hypothesis to test (``resuming``: against a stored map
+        the robot restarted in)."""
+        self._abandon_hypotheses(lost=True)
+        node = self._add_meet(ev)
+        tol = self.p.tol
+        fresh = candidates(self.map, self.map.signature(node), tol, {node}, None)
+        for c, k in fresh:
+            self.hyps.live.append(
+                Hypothesis(
+                    {node: (c, k)}, lost_start=not resuming, resumed=resuming, crowd=len(fresh)
+                )
+            )
+        if fresh:
+            self.hyps.fragment.add(node)
+        self.plan = []
+        self.partial_m = 0.0
+        self._note(f"lost ({why}): new node {node}, {len(fresh)} look-alike(s)")
+        return node, 0

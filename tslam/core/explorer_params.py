@@ -1,0 +1,189 @@
+"""The exploration arbiter's parameters, each with the case that set it."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from tslam.core.localize import Tolerances
+from tslam.core.walkon import WalkParams
+
+
+@dataclass(frozen=True)
+class ExplorerParams:
+    tol: Tolerances = field(default_factory=Tolerances)
+    merge_evidence: int = 2  # confirmed predictions that prove a single hypothesis ...
+    weigh_crowd: bool = True  # ... and more where many old nodes look alike (localize.py)
+    weak_through_rad: float = math.radians(40.0)  # "straight on" at a weak meet point
+    # The tracer may leave its edge for a moment (a silent patch, a bump) and re-access it.
+    # Back on an edge within this (dead-reckoned, so short-range) distance, it is the same one.
+    rejoin_m: float = 1.0
+    # ... having driven no more than this further (a re-access near a junction backs and
+    # turns: fig12 seed 8 drove 1.6 m to be back 0.2 m from where it left, and went lost).
+    rejoin_drive_m: float = 4.0
+    # ... and within this much, having driven no further off it, nothing was disturbed (0:
+    # every excursion makes the edge's length a bound only).
+    blip_m: float = 0.3
+    # A port this reading does not show (merged with another, or a room's door the sweep
+    # cannot resolve from its meet point, known by the way in) is left by its own bearing,
+    # straight on up to this far until the edge's two obstacles straddle the way: from
+    # office:1's meet point 94, 2.9 m from the door, the ring heard one jamb dead ahead and a
+    # side wall, and the robot traced them at the tracer's 1.5 m, back into the room.
+    own_bearing_until_sides_m: float = 3.5
+    # An excursion straight on along the course (within ``straight_rad`` of it, driving at
+    # most ``straight_slack_m`` more than the gap) is on the same edge up to this far (0:
+    # only ``rejoin_m``).
+    straight_rejoin_m: float = 3.0
+    straight_rad: float = math.radians(20.0)
+    straight_slack_m: float = 0.2
+    # Homed back onto the point just left (the edge could not be held near the junction):
+    # recognised by dead reckoning, which is good over a metre, and retried once.
+    bounce_m: float = 0.2
+    bounce_angle_rad: float = math.radians(20.0)
+    bounce_length_m: float = 1.5
+    # ... or back by the same departure after up to this long (a U-turn), dead reckoning
+    # placing it within bounce_m and this fraction of the way (0: none).
+    bounce_far_m: float = 20.0
+    bounce_rel: float = 0.02
+    bounce_retries: int = 1
+    # A dead end reached again by another departure is the one mapped if dead reckoning
+    # puts it this close to where the robot last was there, whichever way it went out
+    # (two corners of one junction are further apart: each is some 0.45 m from both its
+    # walls) ...
+    boundary_same_m: float = 0.3
+    # ... or this close, if the way out was along that departure (corners are homed less
+    # precisely than meet points).
+    boundary_again_m: float = 0.5
+    # Homed again this close after leaving a meet point, and read with another number of
+    # edges: the two points are one place (``Explorer._reread``, ``_read_place``).
+    place_hop_m: float = 0.45
+    # Homed within ``place_hop_m`` at the place's other point, read with another degree, where
+    # the departure being left by leaves too: go on by it (False: a departure not held).
+    on_through_place: bool = True
+    # ... and read with the same degree, further than ``bounce_m`` off: the place read from
+    # its other point, the same node, its ports matched by bearing (False: a new node).
+    place_hop_same: bool = True
+    # A node read at two points of its place: an edge to it is matched with that much more
+    # length slack, as the robot may home at either end (False: the edge's own tolerance).
+    place_span_slack: bool = True
+    # An edge whose length is a walk's remainder is matched with this much more slack, until
+    # a traversal measures it: fig12 seed 10 mapped a dead end at 1.17 m so and, back along
+    # it, homed at its junction after 1.55 m, 4 cm beyond the tolerance, and went lost.
+    estimate_slack_m: float = 0.5
+    # Which departure the robot went out by: the bearing to where its way is first this far
+    # from the node (``_left_by``).
+    left_by_m: float = 0.8
+    # An arrival after an unexplored departure whose way out went clearly (by this margin)
+    # along another unexplored departure ends that one's edge (``_departure_taken``).
+    departure_taken: bool = True
+    departure_taken_margin_rad: float = math.radians(20.0)
+    # A hypothesis that has predicted nothing for this many arrivals in a row is dropped: the
+    # robot has gone where it cannot be tested, and "a new place" explains as much. This is
+    # the paper's candidate sets, each holding only what adjoins the previous set.
+    silent_life: int = 2
+    # A meet point found partway along a known edge its first tracing passed without homing
+    # (the third obstacle silent just then, as at a room's corner): placed on that pass by
+    # dead reckoning, trusted only while the robot has travelled this little since ...
+    split_recent_m: float = 20.0
+    twin_m: float = 0.25  # ... and a meet point this far from where it says is another one
+    split_off_m: float = 0.6  # ... and the pass went this close by the meet point;
+    split_slack_m: float = 1.0  # ... at about the place the edge's length says;
+    split_rest_m: float = 0.5  # ... with this much of the pass still to go;
+    split_look_m: float = 0.8  # the pass this far on shows which departure leads on,
+    split_angle_rad: float = math.radians(35.0)  # ... within this angle
+    split_margin_rad: float = math.radians(20.0)  # ... and clearly closer than any other
+    # Dead reckoning turns slowly (section V-C): a place matched with its departures turned
+    # further than this from the old node's, given the metres driven between the two
+    # readings, is not that place. It is what tells fig15's mirror images apart.
+    heading_base_rad: float = math.radians(25.0)
+    heading_drift_rad_per_m: float = math.radians(0.25)
+    # ... and the places one merge makes one are turned alike: the turns of two of its pairs
+    # differ by no more than this, plus the drift over the metres between their readings.
+    # Each turn is the drift since the old reading plus the sweeps' error; the drift is
+    # shared by nodes read near each other. fig1's two bays are mirror images: on a fast
+    # ring a bay's junction matched the other's turned 32 degrees (its heading allowed 35),
+    # the junction 0.8 m from it matched turned 0 degrees, and the bays were merged (and
+    # again, 26 and 0, later in the run). Of true merges, two turns differed by at most
+    # 22.2 degrees more than that drift: over 27 in 30 runs (fig1, fig12, fig13, fig14,
+    # fig16; seeds 1-3; drift paper and severe), in 31 on a fast ring (fig1, fig12, fig13,
+    # fig16; seeds 1-8, drift paper) and in fig12 seed 25 without drift, whose merge 21
+    # degrees refused. The sweeps' error is too large for this to tell most mirror images.
+    heading_pair_rad: float = math.radians(28.0)
+    # Over one edge dead reckoning is good (section V-C), so a merge that makes an edge a
+    # loop needs its two ends about where the robot left and came back: within this much
+    # and this fraction of the edge's length. fig1's mirrored rooms, 3.6 m apart along one
+    # 3.9 m edge, were merged as one room whose edge came back to it (seed 11).
+    loop_gap_m: float = 0.5
+    loop_gap_rel: float = 0.15
+    # Over a longer way it drifts, but not without bound: a merge whose two places dead
+    # reckoning put further apart than this much and this fraction of the metres driven
+    # between the robot's last stands at them is refused. In a generated grid maze a block
+    # of junctions is alike in topology, edge lengths and angles to one 17 m away, and was
+    # proven onto it by three edges and two dead ends (maze:4 seed 1, drift paper: 17 m
+    # apart after 69 m driven; maze:6 at paper and severe: 0.23-0.36 of the metres driven).
+    # Of the 399 node pairs true merges made one in 175 runs at every drift (built-in and
+    # generated worlds, stop 38's code), none came within 2 m of this (at most 5.6 m after
+    # 49 m, office:5 at severe); the 15 false pairs went 3.6-13 m beyond it. The paper's
+    # robot drifted "over 10 ft" in a few hundred metres.
+    drift_base_m: float = 1.5
+    drift_rel: float = 0.15
+    # The same bound over the chain of fewest metres the robot's stands join the two places
+    # by, through places already merged (``tslam.core.stands``), not only over the metres
+    # between its last stands at them. maze:5 seed 5 at drift ``severe`` merged six places
+    # 10 m from their look-alikes after 67-100 m driven; chains of 25-41 m joined them. In
+    # the 175 runs above (stop 40's code) the 688 true pairs all came 1.8 m or more inside
+    # it, the 13 false ones 2.9-5.2 m beyond. Off: it is not sound as it stands. A chain's
+    # hops may be driven hundreds of metres apart, each turned by the heading error of its
+    # time: fig1 seed 13 (drift paper) had a true merge refused, 3.9 m over a 12 m chain whose
+    # first hop was driven at 28 m and the others at 186-288 m, some 50 degrees apart in
+    # heading error. Each hop needs turning by the heading drift its revisits measure first.
+    drift_chain: bool = False
+    # Gone through the expected node without homing (a weak meet point): this traversal's
+    # own dead-reckoned path says which way the robot turned there (``tslam.core.walkon``).
+    walk: WalkParams = field(default_factory=WalkParams)
+    # A piece of map the robot cannot reach, fitting one place only, is merged there
+    # (``Explorer._place_orphans``).
+    place_orphans: bool = True
+    # A new node's look-alikes include the nodes of the open fragment no hypothesis places
+    # any more (``_new_edge``): the fragment may close onto itself (``_loops_apart``).
+    close_fragment: bool = True
+    # A new node reached from a node that may be a copy of an old one is tested as the old
+    # place that edge leads to (``Explorer._lead_ins``).
+    lead_ins: bool = True
+    # A rival hypothesis that a proven one's merge makes true as well does not block it
+    # (``Explorer._fold_implied``).
+    fold_implied: bool = True
+    # A hypothesis's crowd counts every old node that looks like the new one, even those whose
+    # departure the robot came by is already explored (``Explorer._crowd``).
+    crowd_all_ports: bool = True
+    # A proven hypothesis is not merged while its fragment also fits a place where some of
+    # its edges would join two untraced departures of the map (placements.py,
+    # ``open_edges``; ``Explorer._untraced_rivals``): fig15 at drift severe, seed 2, with
+    # cut_past on, merged a corner onto a rotated one mapped whole (dead reckoning's heading
+    # had drifted 74 degrees over the 142 m between the two readings, so the rotation looked
+    # like 17), while the corner it was back at had two edges never traced. Such a place is
+    # no hypothesis of its own (it has no evidence to inherit): the proven one waits until
+    # it is gone.
+    open_rivals: bool = True
+    # Edges that went past a junction without homing there: a hypothesis whose prediction
+    # failed on the edge's length alone, as such an edge explains, is kept; a new node may
+    # be an old one whose departure the robot came by is explored by such an edge; a merge
+    # that would make such an edge one with a shorter one takes it out instead of being
+    # refused. The edge goes from the map when the hypothesis is merged
+    # (``Explorer._past_a_junction``, ``_past_candidates``, ``_cut_conflicts``). Off: on
+    # walks of true graphs it makes right three maps in ten that had a junction passed
+    # unhomed, against one without it, but a restart against a stored map of fig12 (the
+    # daemon's, killed after its first edge) then took another way, into a copy of a
+    # junction reached by a departure not held, and never finished.
+    cut_past: bool = False
+    # A meet point found partway along a known edge goes into the map, even with a departure
+    # straight on: placed on the edge by the recent pass if there is one, else the rest of
+    # the edge is forgotten (``_junction_on_edge``). Off, as before stop 28: such a junction
+    # is passed as a weak meet point, no node of the map.
+    split_open: bool = True
+    # Before calling exploration complete, go back once along every edge between two meet
+    # points traced only once (``Explorer._verify_path``). Off: on walks of true graphs with
+    # one junction passed unhomed it nearly doubles the maps made right, but in simulation
+    # (paper drift, seeds 1-6) it completed the same runs, four of which then drove 2.5 to
+    # 2.7 times the GVG's length instead of 2.2 to 2.3 (the target is 2.5).
+    verify_edges: bool = False

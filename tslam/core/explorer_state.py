@@ -1,0 +1,215 @@
+"""What the exploration arbiter knows between control cycles, and the small helpers every
+part of it uses.
+
+``Explorer`` is one state machine split by concern over a few modules (``arrival``,
+``unhomed``, ``boundaries``, ``resolving``, ``heading_bounds``): each is a mixin over this
+state, and their methods call one another through ``self``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import NamedTuple
+
+from hal.interfaces import DriveLimits
+from hal.types import Odometry
+from tslam.core.edgepaths import EdgePaths
+from tslam.core.explorer_params import ExplorerParams
+from tslam.core.localize import Hypotheses, Tolerances
+from tslam.core.portmap import PortMap
+from tslam.core.signature import Signature
+from tslam.core.stands import Stands
+from tslam.core.topomap import Likeness, Step, TopoMap
+from tslam.core.tracer import BoundaryReached, MeetPointReached, Tracer, TracerParams
+
+TAU = 2.0 * math.pi
+# Edges a hypothesis may say went past a junction (``Explorer._past_a_junction``).
+MAX_CUTS = 2
+
+
+class Past(NamedTuple):
+    """A failed prediction explained by a junction passed without homing: ``beyond`` is
+    the old node (and rotation) this traversal reached past the predicted one, or None if
+    the map's edge went past the meet point just reached."""
+
+    beyond: tuple[int, int] | None
+
+
+@dataclass(frozen=True)
+class MergeRecord:
+    """Which node became which; the truths are copied for scoring only."""
+
+    stamp_s: float
+    pairs: tuple[tuple[int, int, tuple[float, float] | None, tuple[float, float] | None], ...]
+
+
+@dataclass(frozen=True)
+class Note:
+    """Something worth telling the operator (progress lines, the link's event stream)."""
+
+    stamp_s: float
+    text: str
+
+
+class ExplorerState:
+    """The arbiter's state; ``Explorer`` is this with its behaviour mixed in."""
+
+    def __init__(
+        self,
+        limits: DriveLimits,
+        tracer_params: TracerParams | None = None,
+        params: ExplorerParams | None = None,
+        truth: Callable[[], tuple[float, float]] | None = None,
+        tmap: TopoMap | None = None,
+    ) -> None:
+        self.p = params or ExplorerParams()
+        self.map = tmap or TopoMap()
+        self._resuming = len(self.map.nodes()) > 0  # the first node is matched to the stored map
+        self.tracer = Tracer(limits, tracer_params, choose=self._choose)
+        self.hyps = Hypotheses()
+        self._held: set[int] = set()  # hypotheses noted as waiting on untraced rivals
+        self.truth = truth
+        self.here: int | None = None  # the node the robot is at or last left
+        self.leaving: tuple[int, int] | None = None  # (node, port) being traced
+        self.detoured = False  # the tracer left the edge since, and did not rejoin it
+        self.disturbed = False  # ... or left it and rejoined it: the length is only a bound
+        self.wandered_m = 0.0  # ... the distance driven off the edge since (excursions)
+        # Where an excursion off the edge began: x, y, encoder distance, the two flags above
+        # as they stood then, and the tracer's tangent (the course it was on).
+        self._detour_from: (
+            tuple[float, float, float, bool, bool, tuple[float, float] | None] | None
+        ) = None
+        self.partial_m = 0.0  # length before a weak meet point passed through
+        self._through: int | None = None  # ... and the departure that goes on through it
+        # The departure being left by, when the robot homed on the way at its place's other
+        # point: it leaves from there too, and the robot goes on by it (``_reread``).
+        self._on_by: tuple[int, int] | None = None
+        self._on_by_count: dict[tuple[int, int], int] = {}  # ... how often, by departure
+        self.plan: list[Step] = []
+        self.frozen: set[tuple[int, int]] = set()
+        self.done = False
+        self.goal: int | None = None  # a node an operator sent the robot to
+        self.held = False  # standing at a meet point: done, or at its goal
+        self._at: tuple[MeetPointReached, int, PortMap] | None = None  # where held
+        self.merges: list[MergeRecord] = []
+        self.verified: set[int] = set()  # edges gone back along once the map had no frontier
+        self.notes: list[Note] = []
+        self.bounces: dict[tuple[int, int], int] = {}
+        # Meet node -> how far apart two of its place's points were read (``_spans``).
+        self.span: dict[int, float] = {}
+        self._last_visit: tuple[int, tuple[float, ...], PortMap, float, float] | None = None
+        # Meet node -> each port's bearing (odometry frame) when it was last read with every
+        # edge apart; and the bearing to leave by in place of a reading's departure that two
+        # ports share (``_departure_bearing``).
+        self.port_bearings: dict[int, tuple[float, ...]] = {}
+        self._depart_along: float | None = None
+        self._now = 0.0
+        self._odo: Odometry | None = None
+        self.paths = EdgePaths()
+        self.born: dict[int, float] = {}  # meet node -> encoder distance its angles were read at
+        # Node -> where dead reckoning put the robot when it last stood there, and the
+        # encoder distance then (nodes of a stored map have none until visited).
+        self.fixes: dict[int, tuple[float, float, float]] = {}
+        # Every stand at a node, for the chained bound (``drift_chain``; kept only with it on:
+        # a daemon's list would grow by every arrival for as long as it runs).
+        self.stands = Stands()
+        # Edge -> how far apart dead reckoning put its two ends, read one traversal apart.
+        self.edge_gap: dict[int, float] = {}
+        # Edges whose length is a walk's remainder (``_walked_to``): the measured way less the
+        # mapped edges it went through, each off by up to a few decimetres.
+        self.estimated: set[int] = set()
+        # The node last recognised although read with another degree, and whether the edge
+        # being traced left from it: its ports were matched by angle, so which departure
+        # the robot took is a guess, and what it finds there tests no hypothesis.
+        self._misread: int | None = None
+        self.unsure_departure = False
+        # Nodes whose look-alikes were tested and given up on: a copy of one of them may
+        # stand in the map (``_lead_ins``).
+        self.doubtful: set[int] = set()
+
+    def unexplored(self) -> list[tuple[int, int]]:
+        """Departures still to explore (those frozen by an ambiguity are left out)."""
+        return [x for x in self.map.unexplored() if x not in self.frozen]
+
+    def _seen(self, ev: MeetPointReached, a: int, came_from: int) -> Signature:
+        tb: list[bool | None] = [None] * ev.degree
+        tb[a] = self.map.node(came_from).kind == "boundary"
+        return Signature("meet", ev.clearance_m, ev.departures_rad, tuple(tb))
+
+    def _through_port(self, ev: MeetPointReached) -> int | None:
+        a = ev.arrival_index
+        if a is None:
+            return None
+        back = ev.departures_rad[a]
+        ahead = (back + math.pi) % TAU
+        best = min(range(ev.degree), key=lambda i: angdiff(ev.departures_rad[i], ahead))
+        if best == a or angdiff(ev.departures_rad[best], ahead) > self.p.weak_through_rad:
+            return None
+        return best
+
+    def _count_bounce(self, key: tuple[int, int]) -> None:
+        """One more time departure ``key`` was not held; after the retries an unexplored one
+        is given up."""
+        node, port = key
+        self.bounces[key] = self.bounces.get(key, 0) + 1
+        if self.bounces[key] > self.p.bounce_retries and self.map.node(node).ports[port] is None:
+            self.frozen.add(key)
+
+    def _edge_left(self) -> int | None:
+        """The map edge of the departure being traced, once it is known."""
+        if self.leaving is None or not self.map.has_node(self.leaving[0]):
+            return None
+        ports = self.map.node(self.leaving[0]).ports
+        return ports[self.leaving[1]] if self.leaving[1] < len(ports) else None
+
+    def _add_meet(self, ev: MeetPointReached) -> int:
+        truth = self.truth() if self.truth else None
+        node = self.map.add_meet(ev.clearance_m, ev.departures_rad, (ev.x_m, ev.y_m), truth)
+        if self._odo is not None:
+            self.born[node] = self._odo.distance_m
+        return node
+
+    def _fix(self, node: int) -> None:
+        if self._odo is not None:
+            self.fixes[node] = (self._odo.x_m, self._odo.y_m, self._odo.distance_m)
+            if self.p.drift_chain:
+                self.stands.add(node, self._odo.x_m, self._odo.y_m, self._odo.distance_m)
+
+    def _add_boundary(self, ev: BoundaryReached) -> int:
+        truth = self.truth() if self.truth else None
+        return self.map.add_boundary(ev.clearance_m, (ev.x_m, ev.y_m), truth=truth)
+
+    def _likeness(self) -> Likeness:
+        """What every pair a merge makes one must agree on: what a prediction is tested on."""
+        t = self._tol()
+        return Likeness(t.clearance_m, t.angle_rad, t.length_abs_m, t.length_rel)
+
+    def _tol(self, slack_m: float = 0.0) -> Tolerances:
+        tol = self.p.tol
+        if slack_m:
+            tol = replace(tol, length_abs_m=tol.length_abs_m + slack_m)
+        if not self.disturbed:
+            return tol
+        return replace(tol, at_least=True, wandered_m=self.wandered_m)
+
+    def _edge_length(self, measured: float | None) -> float | None:
+        """The edge's length from the encoders: the stretch before a weak meet point passed
+        through, plus this stretch."""
+        return None if measured is None else measured + self.partial_m
+
+    def _size(self) -> str:
+        return f"{len(self.map.nodes())} nodes, {len(self.map.edges())} edges"
+
+    def _note(self, text: str) -> None:
+        self.notes.append(Note(self._now, text))
+
+
+def nearest(bearing: float, deps: Sequence[float]) -> int:
+    """The index of the departure in ``deps`` nearest ``bearing``."""
+    return min(range(len(deps)), key=lambda p: angdiff(deps[p], bearing))
+
+
+def angdiff(a: float, b: float) -> float:
+    return abs((a - b + math.pi) % TAU - math.pi)

@@ -1,0 +1,94 @@
+"""Dead reckoning as a bound only: how far the heading or position can have drifted since an
+old node was read, which rules out a look-alike turned too far (fig15's mirror images).
+"""
+
+from __future__ import annotations
+
+import math
+
+from tslam.core.explorer_state import ExplorerState, angdiff
+from tslam.core.localize import Hypothesis
+
+
+class HeadingBounds(ExplorerState):
+    """Drift bounds on hypotheses."""
+
+    def _heading_fits(self, x: int, c: int, k: int) -> bool:
+        """Whether node ``x`` can be old node ``c`` under rotation ``k`` as far as dead
+        reckoning's heading goes: their departures, each in the odometry frame of its own
+        reading, are turned no more than the drift between those readings allows."""
+        bx = self.born.get(x)
+        if bx is None or not self.map.has_node(x) or self.map.node(x).kind != "meet":
+            return True
+        return self._turn_fits(self.map.node(x).departures_rad, bx, c, k)
+
+    def _turn_fits(self, deps: tuple[float, ...], read_at_m: float, c: int, k: int) -> bool:
+        """``_heading_fits`` for departures ``deps`` read at encoder distance ``read_at_m``:
+        departure i is port ``(i + k) % degree`` of old node ``c``."""
+        turn = self._turn(deps, c, k)
+        if turn is None:
+            return True
+        p = self.p
+        return abs(turn[0]) <= p.heading_base_rad + p.heading_drift_rad_per_m * abs(
+            read_at_m - turn[1]
+        )
+
+    def _turn(self, deps: tuple[float, ...], c: int, k: int) -> tuple[float, float] | None:
+        """How far departures ``deps`` are turned from old node ``c``'s under rotation ``k``,
+        and the encoder distance ``c`` was read at; None if that says nothing (not a meet
+        point, another degree, no reading)."""
+        bc = self.born.get(c)
+        if bc is None or not self.map.has_node(c):
+            return None
+        nc = self.map.node(c)
+        if nc.kind != "meet" or len(deps) != nc.degree:
+            return None
+        deg = nc.degree
+        turns = [deps[j] - nc.departures_rad[(j + k) % deg] for j in range(deg)]
+        return math.atan2(sum(map(math.sin, turns)), sum(map(math.cos, turns))), bc
+
+    def _drifted_apart(self, h: Hypothesis) -> tuple[int, int, float, float] | None:
+        """The first pair ``h`` makes one place that dead reckoning put further apart than
+        it drifts over the metres driven between the robot's last stands at them, or over
+        the chain of fewest metres its stands join them by (``drift_chain``): (node, old
+        node, the distance, those metres); None if there is none."""
+        p = self.p
+        for x, (c, _) in sorted(h.mapping.items()):
+            fx, fc = self.fixes.get(x), self.fixes.get(c)
+            if fx is None or fc is None:
+                continue
+            gap, driven = math.hypot(fx[0] - fc[0], fx[1] - fc[1]), abs(fx[2] - fc[2])
+            if gap > p.drift_base_m + p.drift_rel * driven:
+                return x, c, gap, driven
+        if not p.drift_chain:
+            return None
+        chains = self.stands.chains(sorted((x, c) for x, (c, _) in h.mapping.items()))
+        for (x, c), (gap, driven) in sorted(chains.items()):
+            if gap > p.drift_base_m + p.drift_rel * driven:
+                return x, c, gap, driven
+        return None
+
+    def _heading_misfits(self, h: Hypothesis) -> list[int]:
+        """The nodes ``h`` maps turned further than dead reckoning drifts: from their old
+        nodes, or, failing that, the first two turned apart from each other."""
+        misfits = [x for x, (c, k) in sorted(h.mapping.items()) if not self._heading_fits(x, c, k)]
+        return misfits or self._turned_apart(h)
+
+    def _turned_apart(self, h: Hypothesis) -> list[int]:
+        """The first two meet points ``h`` maps whose turns from their old nodes differ by
+        more than ``heading_pair_rad`` and the drift between their readings; else none."""
+        turned = []  # node, turn, read at, old node read at
+        for x, (c, k) in sorted(h.mapping.items()):
+            bx = self.born.get(x)
+            if bx is None or not self.map.has_node(x) or self.map.node(x).kind != "meet":
+                continue
+            turn = self._turn(self.map.node(x).departures_rad, c, k)
+            if turn is not None:
+                turned.append((x, turn[0], bx, turn[1]))
+        p = self.p
+        for i, (x, t, bx, bc) in enumerate(turned):
+            for y, u, by, bd in turned[i + 1 :]:
+                drift = p.heading_drift_rad_per_m * (abs(bx - by) + abs(bc - bd))
+                if angdiff(t, u) > p.heading_pair_rad + drift:
+                    return [x, y]
+        return []

@@ -1,0 +1,523 @@
+"""Localization's decisions: merge a proven hypothesis, record an ambiguity no move can settle,
+pick the move that separates the rest, place the fragments left unattached.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Sequence
+from dataclasses import replace
+
+import networkx as nx
+
+from tslam.core.explorer_state import MAX_CUTS, ExplorerState, MergeRecord
+from tslam.core.localize import Hypotheses, Hypothesis, separating_port
+from tslam.core.placements import Placement, other_placements, placements
+from tslam.core.portmap import PortMap
+from tslam.core.topomap import EdgeConflictError, MapError, MergePlan, TopoMap
+from tslam.core.tracer import MeetPointReached
+from tslam.core.zipmerge import implies, merge_mapping
+
+# Folding tries each proven hypothesis's merge on a copy of the map. A copy made after losing
+# the way is tested by a few; fig15's aisles are fitted by dozens at once, none of which
+# implies the rest, and trying them all at every arrival took seconds per arrival.
+FOLD_MAX = 4
+LOOP_MARGIN = 2  # confirmations a loop or a placement needs over the other kind
+
+
+class Resolving(ExplorerState):
+    """Testing, merging and giving up on localization hypotheses."""
+
+    def _age(self, hyps: list[Hypothesis], spoke: set[int]) -> list[Hypothesis]:
+        out = []
+        for h in hyps:
+            h.silent_arrivals = 0 if id(h) in spoke else h.silent_arrivals + 1
+            if h.silent_arrivals <= self.p.silent_life:
+                out.append(h)
+        return out
+
+    def _resolve(self, node: int) -> dict[int, tuple[int, int]]:
+        """Merge a proven hypothesis; record an ambiguity no move here can settle. Returns
+        the nodes a merge renamed: old id -> (id, port shift)."""
+        if not self.hyps.live:
+            self.hyps.clear()
+            return {}
+        # A hypothesis no prediction has tested yet is in the same position as "all of it is
+        # new": possible, unrefuted, unsupported. Only tested hypotheses compete.
+        tested = self._tested()
+        evidence = self.p.merge_evidence
+        if len(tested) > 1:
+            # A hypothesis whose merge would be refused below for its heading is no rival
+            # either, as in ``_other_placements``: it only kept the right one waiting, while
+            # the fragment grew round a loop onto itself (fig12 seed 5). But the one left
+            # is not the more likely for it: where places repeat, the fragment may be new
+            # and both wrong (fig15 without drift, seed 2: a column of crossings merged
+            # onto the one beside it, 3.5 m away). It needs one confirmation more.
+            plausible = [h for h in tested if not self._heading_misfits(h)]
+            if plausible and len(plausible) < len(tested):
+                evidence += 1
+            tested = plausible or tested
+        aside: list[Hypothesis] = []
+        held_up = False
+        if self.p.close_fragment:
+            tested, aside, held_up = self._loops_apart(tested, evidence)
+        if 1 < len(tested) <= FOLD_MAX and self.p.fold_implied:
+            tested = self._fold_implied(tested)
+        if len(tested) == 1 and tested[0].proven(evidence, self.p.weigh_crowd) and not held_up:
+            h = tested[0]
+            far = self._drifted_apart(h)
+            if far is not None:
+                x, c, gap, driven = far
+                self.hyps.live.remove(h)
+                self._note(
+                    f"node {node}: a place that fits the evidence puts node {x} on node {c}, "
+                    f"{gap:.1f} m apart by dead reckoning after {driven:.0f} m: not merged"
+                )
+                return self._resolve(node)
+            turned = self._heading_misfits(h)
+            if turned:
+                # Proven by topology, refuted by dead reckoning: a mirror image (fig15). Only
+                # here, at the merge: a hypothesis on its way to proof is left to predictions.
+                self.hyps.live.remove(h)
+                self._note(
+                    f"node {node}: a place that fits the evidence is turned further than dead "
+                    f"reckoning drifts (nodes {', '.join(map(str, turned))}): not merged"
+                )
+                return self._resolve(node)
+            search = self._other_placements(h)
+            if search is None:
+                self._note(f"node {node}: too many places fit the evidence to check: not merged")
+                self._abandon_hypotheses()
+                return {}
+            rivals, own_fits = search
+            if not rivals and own_fits:
+                untraced = [] if h.resumed else self._untraced_rivals(h)
+                if untraced == []:
+                    return self._merge(h, keep=aside)
+                # Not rivals to test: they inherit no evidence (their edges are untraced),
+                # and one merged when ``h`` fell would be a guess. ``h`` waits for them to go.
+                if id(h) not in self._held:
+                    self._held.add(id(h))
+                    what = "too many places" if untraced is None else f"{len(untraced)} place(s)"
+                    self._note(
+                        f"node {node}: the evidence also fits {what} whose edges there are "
+                        "untraced: not merged"
+                    )
+                return {}
+            # The evidence fits elsewhere as well: those places are hypotheses too, with the
+            # same support, for the next moves to separate, or the ambiguity to record.
+            for placement in rivals:
+                self.hyps.live.append(
+                    replace(h, mapping=dict(placement), silent_arrivals=0, cuts=set(h.cuts))
+                )
+            if rivals:
+                self._note(
+                    f"node {node}: the evidence also fits {len(rivals)} other place(s): "
+                    + "; ".join(
+                        ", ".join(f"{x}={c}" for x, (c, _) in sorted(pl.items())) for pl in rivals
+                    )
+                )
+            tested = self._tested()
+        if len(tested) == 1 and tested[0].resumed:
+            # Only a move that tests it is worth waiting for. Rivals no prediction has tested
+            # are unsupported, and a stored map of a few nodes can never confirm its
+            # placement twice: waiting on moves that test only them, the robot resumed in
+            # fig12 (seed 1, killed after one edge) let its placement age out and went round
+            # the room for hours, mapping it anew each time (tests/test_explorer_resume.py).
+            tests_it = Hypotheses(self.hyps.fragment, [tested[0]])
+            if separating_port(self.map, tests_it, node) is not None:
+                return {}
+            return self._merge(tested[0])
+        if node in self.hyps.fragment and self._separating_port(node) is not None:
+            return {}
+        if len(tested) == 1:
+            # Not proven, and nothing to test from here: keep it open for a later edge to
+            # test; it ages out if none does. Never merge on a guess.
+            return {}
+        self._abandon_hypotheses()
+        return {}
+
+    def _loops_apart(
+        self, tested: list[Hypothesis], evidence: int
+    ) -> tuple[list[Hypothesis], list[Hypothesis], bool]:
+        """The tested hypotheses that compete, those set aside to keep open after a merge,
+        and whether a rival of the other kind holds any merge up. Hypotheses that close the
+        fragment onto itself (the robot came round to where it had been since it left the
+        map) and hypotheses that place it on old nodes are rivals, but evidence tells them
+        apart as it does any: the proven one of either kind goes ahead of the other kind
+        when it has ``LOOP_MARGIN`` confirmations more than each of them. A loop merged
+        keeps the placements open (they may yet be true, the fragment one place fewer); a
+        placement merged ends the loops, as any merge ends the fragment. Restarted after
+        fig12's first edge (seed 2), the placement on the stored pair refuted and each
+        lap's new nodes bringing new look-alikes among the stored two, the robot went round
+        the room for ever; now the second lap closes onto the first."""
+        loops: list[Hypothesis] = []
+        others: list[Hypothesis] = []
+        for h in tested:
+            (loops if self._closes_on_itself(h) else others).append(h)
+        if 1 < len(loops) <= 2 * FOLD_MAX and self.p.fold_implied:
+            loops = self._fold_implied(loops)  # each lap onto each before: one merge
+        if not loops or not others:
+            return loops or others, [], False
+        if 1 < len(others) <= FOLD_MAX and self.p.fold_implied:
+            others = self._fold_implied(others)
+        weigh = self.p.weigh_crowd
+
+        def ahead(lead: list[Hypothesis], rest: list[Hypothesis]) -> bool:
+            if len(lead) != 1 or not lead[0].proven(evidence, weigh):
+                return False
+            e = lead[0].confirmed + 0.5 * lead[0].dead_ends
+            return all(e >= r.confirmed + 0.5 * r.dead_ends + LOOP_MARGIN for r in rest)
+
+        if ahead(others, loops):
+            return others, [], False
+        if ahead(loops, others):
+            return loops, others, False
+        return others, [], True  # the placements, as if alone, for the ambiguity they make
+
+    def _closes_on_itself(self, h: Hypothesis) -> bool:
+        return all(c in self.hyps.fragment for c, _ in h.mapping.values())
+
+    def _renamed_hypothesis(
+        self, h: Hypothesis, renamed: dict[int, tuple[int, int]]
+    ) -> Hypothesis | None:
+        """``h`` in the map after a merge renamed nodes; None if it no longer says anything
+        the map can hold (two of its nodes became one, or one became its old node)."""
+        mapping: dict[int, tuple[int, int]] = {}
+        for x, (c, k) in h.mapping.items():
+            rx, sx = renamed.get(x, (x, 0))
+            rc, sc = renamed.get(c, (c, 0))
+            if rx == rc or rx in mapping or not (self.map.has_node(rx) and self.map.has_node(rc)):
+                return None
+            mapping[rx] = (rc, (k - sx + sc) % self.map.node(rc).degree)
+        images = [c for c, _ in mapping.values()]
+        if len(set(images)) < len(images) or any(not self.map.has_edge(e) for e in h.cuts):
+            return None
+        return replace(h, mapping=mapping, cuts=set(h.cuts))
+
+    def _tested(self) -> list[Hypothesis]:
+        """The hypotheses that compete for a merge: those some prediction has tested."""
+        return [h for h in self._contenders() if h.tested]
+
+    def _contenders(self) -> list[Hypothesis]:
+        """The live hypotheses, but for those set aside. One that says an edge went past a
+        junction starts less likely than one that needs no such slip, so it contends only
+        once it has more confirmations than any of those; until then it waits: it neither
+        blocks a merge nor makes an ambiguity, and no move is made to test it (in fig14's
+        lab, a dozen junctions alike, such tests sent the robot round and round)."""
+        live = self.hyps.live
+        plain = [h for h in live if not h.cuts]
+        if not plain:
+            return list(live)
+        best = max(h.confirmed for h in plain)
+        return plain + [h for h in live if h.cuts and h.confirmed > best]
+
+    def _separating_port(self, node: int) -> int | None:
+        """The move that separates the contenders fastest. A loop of the fragment onto
+        itself is tested by the moves made anyway, as a slip is (``_contenders``): moves
+        made to test loops sent the robot round fig14's lab (7 of its 9 default bench runs
+        held every place and edge at the end without loops, 4 with those moves)."""
+        testable = [h for h in self._contenders() if not self._closes_on_itself(h)]
+        return separating_port(self.map, Hypotheses(self.hyps.fragment, testable), node)
+
+    def _untraced_rivals(self, h: Hypothesis) -> list[Placement] | None:
+        """With ``open_rivals``, the placements of ``h``'s fragment that fit the map only
+        with some of its edges between two untraced departures; None if the search ran out
+        of steps (it ruled none out)."""
+        if not self.p.open_rivals:
+            return []
+        search = self._other_placements(h, open_edges=True)
+        return search[0] if search is not None else None
+
+    def _other_placements(
+        self, h: Hypothesis, open_edges: bool = False
+    ) -> tuple[list[Placement], bool] | None:
+        """``other_placements`` of ``h``'s fragment, in the map as ``h``'s claims about old
+        nodes (a lead-in: an old node is a copy of another) would make it: there the copies
+        are one place, and a placement on a copy is no rival. A fragment that closes onto
+        itself round a loop maps each lap onto the one before: the first lap is placed,
+        onto the nodes the robot first found (the laps after it say the same again)."""
+        if any(c in h.mapping for c, _ in h.mapping.values()):
+            h = replace(h, mapping={x: ck for x, ck in h.mapping.items() if ck[0] not in h.mapping})
+        view = self._view(h)
+        old = {x: ck for x, ck in h.mapping.items() if x not in self.hyps.fragment}
+        if not old:
+            return other_placements(
+                view, h, self.p.tol, fits=self._heading_fits, open_edges=open_edges
+            )
+        merged = self._merged_copy(old, view)
+        if merged is None:
+            return [], False
+        trial, renamed = merged
+        mapping = {}
+        for x, (c, k) in h.mapping.items():
+            if x in old or renamed.get(x, (x, 0))[0] != x:
+                continue  # an old node, or made one with one by the claims themselves
+            rc, sc = renamed.get(c, (c, 0))
+            mapping[x] = (rc, (k + sc) % trial.node(rc).degree)
+        return other_placements(
+            trial,
+            replace(h, mapping=mapping),
+            self.p.tol,
+            fits=self._heading_fits,
+            open_edges=open_edges,
+        )
+
+    def _fold_implied(self, tested: list[Hypothesis]) -> list[Hypothesis]:
+        """The one proven hypothesis whose merge makes every other tested one true as well,
+        if there is one (``tslam.core.zipmerge``); else all of them, still rivals."""
+        proven = [h for h in tested if h.proven(self.p.merge_evidence, self.p.weigh_crowd)]
+        for h in sorted(proven, key=lambda h: -(h.confirmed + 0.5 * h.dead_ends)):
+            merged = self._merged_copy(h.mapping, self._view(h))
+            if merged is not None and all(
+                implies(*merged, o.mapping) for o in tested if o is not h
+            ):
+                return [h]
+        return tested
+
+    def _merged_copy(
+        self, mapping: dict[int, tuple[int, int]], base: TopoMap | None = None
+    ) -> tuple[TopoMap, dict[int, tuple[int, int]]] | None:
+        """A copy of the map (or of ``base``) with ``mapping`` merged, and the renames; None
+        if the map refuses the merge."""
+        trial = (self.map if base is None else base).copy()
+        try:
+            return trial, merge_mapping(trial, mapping, self._likeness())
+        except MapError:
+            return None
+
+    def _stand(
+        self, ev: MeetPointReached, node: int, pm: PortMap, renamed: dict[int, tuple[int, int]]
+    ) -> tuple[int, PortMap]:
+        """The robot stands at ``node``, as a merge may have renamed it."""
+        if node in renamed:
+            node, shift = renamed[node]
+            pm = pm.renamed(shift)
+        self.here = node
+        self._last_visit = (node, ev.departures_rad, pm, ev.x_m, ev.y_m)
+        if len(set(pm.index)) == len(pm.index) == ev.degree:
+            self.port_bearings[node] = tuple(ev.departures_rad[i] for i in pm.index)
+        self._at = (ev, node, pm)
+        return node, pm
+
+    def _place_orphans(self, here: int) -> dict[int, tuple[int, int]]:
+        """Merge the pieces of map the robot cannot reach that fit one place only.
+
+        A fragment begun when the robot was lost, whose hypotheses went when it was lost
+        again, is left unattached: no path leads to it, so its departures are never explored
+        and the map is never complete. It holds what the robot traced there, though, and that
+        is evidence like any hypothesis's: placed on the rest of the map everywhere it fits
+        (``placements``, the test every merge passes), it is merged if it fits exactly one
+        place and holds the edges a proven hypothesis needs (each edge between two of its
+        meet points a confirmation, each dead end half of one). Returns the merge's renames
+        (empty if nothing merged): a merge may rename the node the robot stands at too.
+        """
+        for comp in sorted(nx.connected_components(self.map.graph), key=min):
+            if here in comp or not any(None in self.map.node(n).ports for n in comp):
+                continue
+            nodes = sorted(comp)
+            kinds = [{self.map.node(e.u).kind, self.map.node(e.v).kind} for e in self.map.edges()
+                     if e.u in comp]  # fmt: skip
+            h = Hypothesis({}, kinds.count({"meet"}), len(kinds) - kinds.count({"meet"}))
+            if not h.proven(self.p.merge_evidence, self.p.weigh_crowd):
+                continue
+            found = placements(self.map, nodes, self.p.tol, 2, fits=self._heading_fits)
+            if found is None or len(found) != 1:
+                continue
+            h.mapping = dict(found[0])
+            if self._drifted_apart(h) is not None:
+                continue
+            self._note(f"nodes {', '.join(map(str, nodes))}, out of reach, fit one place only")
+            renamed = self._merge(h)
+            if renamed:
+                return renamed  # the components have changed: the next arrival looks again
+        return {}
+
+    def _abandon_hypotheses(self, lost: bool = False) -> None:
+        """Nothing can tell the fragment from its look-alikes: keep its nodes as new places,
+        say so in the map, and do not re-explore through them what the look-alikes already
+        explored (that would unroll a symmetric building for ever).
+
+        ``lost``: the robot no longer knows where it is, so the hypotheses can make no more
+        predictions. The map still says where the evidence so far fits two places or more,
+        but nothing showed that no move could tell them apart (there was simply no move left
+        to make): no departure is frozen, and a node that fits one place only is not called
+        ambiguous. A frozen departure is never explored, even once its piece of map is
+        merged back (tests/test_explorer_graph.py)."""
+        # Only hypotheses some prediction has confirmed count: a look-alike whose departures
+        # are all unexplored could not be tested yet, which is no ambiguity.
+        tested = self._tested()
+        self.doubtful |= self.hyps.fragment
+        for x in sorted(self.hyps.fragment):
+            if not self.map.has_node(x):
+                continue
+            others = {h.mapping[x][0] for h in tested if x in h.mapping}
+            if len(others) < (2 if lost else 1):
+                continue
+            self.map.set_ambiguous(x, others)
+            for p, e in enumerate(self.map.node(x).ports):
+                if not lost and e is None and all(
+                    (img := h.image_port(self.map, x, p)) is not None
+                    and self.map.node(img[0]).ports[img[1]] is not None
+                    for h in tested
+                    if x in h.mapping
+                ):
+                    self.frozen.add((x, p))
+            self._note(f"node {x} is ambiguous with {sorted(others)}: not merged")
+        self.hyps.clear()
+
+    def _view(self, h: Hypothesis) -> TopoMap:
+        """The map as ``h`` says it is: without the edges it found went past a junction."""
+        cuts = sorted(e for e in h.cuts if self.map.has_edge(e))
+        if not cuts:
+            return self.map
+        view = self.map.copy()
+        for e in cuts:
+            view.remove_edge(e)
+        return view
+
+    def _cut_conflicts(self, h: Hypothesis) -> TopoMap | None:
+        """The map ``h`` merges into: without the edges it says went past a junction and,
+        with ``cut_past``, without any edge its merge would make one with a shorter edge
+        between two meet points (the first tracing went past one: fig13's meet point 0,
+        whose third wall the ring rarely resolves, joined meet points 1 and 2 by one 4.3 m
+        edge). None, with a note, if the map refuses the merge. It is tried on a copy, so a
+        refused merge leaves the map as it was (merging the real one could stop halfway)."""
+        while True:
+            view = self._view(h)
+            try:
+                merge_mapping(view.copy(), h.mapping, self._likeness())
+                return view
+            except EdgeConflictError as exc:
+                e = self._went_past(view, exc.edges) if self.p.cut_past else None
+                if e is None or len(h.cuts) >= MAX_CUTS:
+                    self._note(f"merge refused by the map ({exc}): keeping both")
+                    return None
+                h.cuts.add(e)
+            except MapError as exc:
+                self._note(f"merge refused by the map ({exc}): keeping both")
+                return None
+
+    def _went_past(self, view: TopoMap, edges: tuple[int, int]) -> int | None:
+        """Of two edges a merge makes one, the longer, if it is longer than the length
+        tolerance allows and the shorter joins two meet points: it went past a junction."""
+        a, b = (view.edge(e) for e in edges)
+        long, short = (a, b) if a.length_m > b.length_m else (b, a)
+        tol = self._tol()
+        if long.length_m - short.length_m <= tol.length_abs_m + tol.length_rel * long.length_m:
+            return None
+        if any(view.node(n).kind != "meet" for n in (short.u, short.v)):
+            return None
+        return long.id
+
+    def _merge(self, h: Hypothesis, keep: Sequence[Hypothesis] = ()) -> dict[int, tuple[int, int]]:
+        """Merge ``h``; ``keep``: hypotheses the merge does not settle, kept open."""
+        view = self._cut_conflicts(h)
+        if view is None:
+            self._abandon_hypotheses()
+            return {}
+        loop = self._false_loop(h, view)
+        if loop is not None:
+            e, gap = loop
+            self._note(
+                f"merge refused: it makes edge {e} a loop, but dead reckoning put its ends "
+                f"{gap:.1f} m apart: keeping both"
+            )
+            self._abandon_hypotheses()
+            return {}
+        if view is not self.map:
+            self._remove_cuts(h)
+        pairs = []
+        truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
+
+        def record(plan: MergePlan) -> None:
+            pairs.extend((d, r, truth[d], truth[r]) for d, (r, _) in plan.nodes.items())
+
+        try:
+            renamed = merge_mapping(self.map, h.mapping, self._likeness(), record)
+        except MapError as exc:
+            self._note(f"merge refused by the map ({exc}): keeping both")
+            self._abandon_hypotheses()
+            return {}
+        self.merges.append(MergeRecord(self._now, tuple(pairs)))
+        self._note(
+            "loop closed: " + ", ".join(f"{d}={r}" for d, r, _, _ in pairs) + f"; {self._size()}"
+        )
+        self._apply_renames(renamed)
+        fragment = {renamed.get(x, (x, 0))[0] for x in self.hyps.fragment}
+        self.hyps.clear()
+        for o in keep:
+            kept = self._renamed_hypothesis(o, renamed)
+            if kept is not None:
+                self.hyps.live.append(kept)
+        if self.hyps.live:
+            self.hyps.fragment = {x for x in fragment if self.map.has_node(x)}
+        return renamed
+
+    def _remove_cuts(self, h: Hypothesis) -> None:
+        """Take out the edges ``h`` says went past a junction. A node left with no edge at
+        all (the first one the robot mapped, its only edge the one that went past) holds
+        nothing but a look: the place is mapped elsewhere, and its departures lead nowhere
+        the robot could go, so it goes too."""
+        cuts = sorted(e for e in h.cuts if self.map.has_edge(e))
+        ends = set()
+        for e in cuts:
+            edge = self.map.edge(e)
+            ends |= {edge.u, edge.v}
+            self.map.remove_edge(e)
+            self.edge_gap.pop(e, None)
+        self._note(f"edge(s) {', '.join(map(str, cuts))} went past a junction: removed")
+        busy = {self.here, self.goal, None if self.leaving is None else self.leaving[0]}
+        busy |= set(h.mapping) | {c for c, _ in h.mapping.values()}
+        for n in sorted(ends - busy):
+            if self.map.has_node(n) and all(e is None for e in self.map.node(n).ports):
+                self.map.remove_node(n)
+                self.hyps.fragment.discard(n)
+                self._note(f"node {n}, left with no edge, removed")
+
+    def _false_loop(self, h: Hypothesis, view: TopoMap | None = None) -> tuple[int, float] | None:
+        """An edge the merge of ``h`` would make a loop although dead reckoning, good over
+        one edge, put its two ends apart; None if there is none. ``view``: the map ``h``
+        merges into (``_view``)."""
+        p = self.p
+        view = self._view(h) if view is None else view
+        far = {
+            e: gap
+            for e, gap in self.edge_gap.items()
+            if view.has_edge(e) and gap > p.loop_gap_m + p.loop_gap_rel * view.edge(e).length_m
+        }
+        if not far:
+            return None
+        trial = copy.deepcopy(view)
+        try:
+            renamed = merge_mapping(trial, h.mapping, self._likeness())
+        except MapError:
+            return None  # the map refuses it anyway, and says why
+        for e, gap in sorted(far.items()):
+            ends = view.edge(e)
+            if renamed.get(ends.u, (ends.u, 0))[0] == renamed.get(ends.v, (ends.v, 0))[0]:
+                return e, gap
+        return None
+
+    def _apply_renames(self, renamed: dict[int, tuple[int, int]]) -> None:
+        if self.leaving is not None and self.leaving[0] in renamed:
+            r, s = renamed[self.leaving[0]]
+            self.leaving = (r, (self.leaving[1] + s) % self.map.node(r).degree)
+        self.frozen = {
+            (renamed[n][0], (p + renamed[n][1]) % self.map.node(renamed[n][0]).degree)
+            if n in renamed
+            else (n, p)
+            for n, p in self.frozen
+        }
+        if self.goal in renamed:
+            self.goal = renamed[self.goal][0]
+        self.plan = []
+        for n, (r, shift) in renamed.items():
+            self.stands.rename(n, r)
+            fix = self.fixes.pop(n, None)
+            if fix is not None and (r not in self.fixes or fix[2] > self.fixes[r][2]):
+                self.fixes[r] = fix
+            old = self.port_bearings.pop(n, None)
+            if old is not None and r not in self.port_bearings:
+                n_ports = len(old)
+                self.port_bearings[r] = tuple(old[(p - shift) % n_ports] for p in range(n_ports))
