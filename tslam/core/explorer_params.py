@@ -144,6 +144,10 @@ class ExplorerParams:
     # A piece of map the robot cannot reach, fitting one place only, is merged there
     # (``Explorer._place_orphans``).
     place_orphans: bool = True
+    # ... and one of the map the robot was restarted with on one confirmation fewer: a
+    # stored map of one edge can confirm once only (fig12 seeds 2, 4 and 6 killed after one
+    # edge: the stored pair was left beside the places it is, 8 nodes for 6).
+    place_stored: bool = True
     # A new node's look-alikes include the nodes of the open fragment no hypothesis places
     # any more (``_new_edge``): the fragment may close onto itself (``_loops_apart``).
     close_fragment: bool = True

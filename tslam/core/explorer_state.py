@@ -128,6 +128,33 @@ class ExplorerState:
         # Nodes whose look-alikes were tested and given up on: a copy of one of them may
         # stand in the map (``_lead_ins``).
         self.doubtful: set[int] = set()
+        # The nodes of the map the robot was restarted with: the building it stopped in, so
+        # a piece of them left out of reach is placed on less evidence (``_place_orphans``).
+        self.stored: set[int] = {n.id for n in self.map.nodes()}
+
+    def settled_map(self) -> TopoMap:
+        """The map without the fragment whose hypotheses are open, nor a node left with no
+        edge: what a restart may start from. The fragment's nodes are new places under one
+        hypothesis and old ones under the rest; stored as new, they stood in the map beside
+        the places they were (fig12 killed after three edges: the loop's first junction
+        twice), every place the restarted robot found fitted both copies alike, and it mapped
+        the room anew for hours."""
+        out = self.map.copy()
+        for n in sorted(self.unsettled()):
+            out.remove_node(n)
+        # A node with no edge can never be tested by a prediction: stored, it is a copy of a
+        # place that no restart can name (fig1 killed on its second node, which looked like
+        # its first: the first alone stayed beside its place for good).
+        for node in out.nodes():
+            if not out.neighbours(node.id):
+                out.remove_node(node.id)
+        return out
+
+    def unsettled(self) -> frozenset[int]:
+        """The nodes ``settled_map`` leaves out."""
+        if not self.hyps.live:
+            return frozenset()
+        return frozenset(n for n in self.hyps.fragment if self.map.has_node(n))
 
     def unexplored(self) -> list[tuple[int, int]]:
         """Departures still to explore (those frozen by an ambiguity are left out)."""

@@ -319,7 +319,12 @@ class Resolving(ExplorerState):
             kinds = [{self.map.node(e.u).kind, self.map.node(e.v).kind} for e in self.map.edges()
                      if e.u in comp]  # fmt: skip
             h = Hypothesis({}, kinds.count({"meet"}), len(kinds) - kinds.count({"meet"}))
-            if not h.proven(self.p.merge_evidence, self.p.weigh_crowd):
+            # A piece of the stored map: the robot was restarted in that building, so the one
+            # place it fits in a map with nothing left to explore is where it is, as for a
+            # resumed hypothesis (a stored map of one edge can never confirm twice).
+            prior = self.p.place_stored and comp <= self.stored
+            evidence = self.p.merge_evidence - (1 if prior else 0)
+            if not h.proven(evidence, self.p.weigh_crowd):
                 continue
             found = placements(self.map, nodes, self.p.tol, 2, fits=self._heading_fits)
             if found is None or len(found) != 1:
@@ -513,6 +518,7 @@ class Resolving(ExplorerState):
             self.goal = renamed[self.goal][0]
         self.plan = []
         for n, (r, shift) in renamed.items():
+            self.stored.discard(n)
             self.stands.rename(n, r)
             fix = self.fixes.pop(n, None)
             if fix is not None and (r not in self.fixes or fix[2] > self.fixes[r][2]):
