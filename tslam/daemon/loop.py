@@ -122,7 +122,6 @@ class Daemon:
         next_status = t0
         next_ping = 0.0
         shown = len(explorer.notes)
-        held_out = explorer.unsettled()
         cycle = 0
         while not self._stop.is_set():
             now = clock.now()
@@ -147,13 +146,9 @@ class Daemon:
                 twist = Twist()
             backend.command(twist)
             change = mirror.refresh(explorer)
-            # The stored map is the settled one: saved when the map changes, and when a
-            # question about a place is settled without changing it (its nodes kept as new).
-            if change is not None or explorer.unsettled() != held_out:
-                self.store.save_map(explorer.settled_map())
-                held_out = explorer.unsettled()
-                if self._link is not None:
-                    self._link.publish_map_change(change)
+            self.store.save_settled(explorer, change is not None)
+            if change is not None and self._link is not None:
+                self._link.publish_map_change(change)
             for note in explorer.notes[shown:]:
                 self._publish_event(explorer, "note", note.text, stamp=note.stamp_s - t0)
             shown = len(explorer.notes)
@@ -263,7 +258,7 @@ class Daemon:
         self.notifier.stopping()
         self.inbox.close()
         try:
-            self.store.save_map(explorer.settled_map())
+            self.store.save_settled(explorer)
             self.store.save_orders(self.orders)
         finally:
             if self._link is not None:

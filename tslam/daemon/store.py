@@ -1,5 +1,6 @@
 """What the daemon keeps on disk, so that a daemon killed at any instant comes back knowing
-its map and its orders: ``map.json`` (after every map change) and ``daemon_state.json`` (after
+its map and its orders: ``map.json`` (the settled map, ``Explorer.settled_map``, after every map
+change and every question about a place opened or settled) and ``daemon_state.json`` (after
 every acknowledged command). Both are written through a temporary file and a rename, so a
 reader, or a restart after SIGKILL, sees either the old file or the new one, never half."""
 
@@ -9,6 +10,7 @@ import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from tslam.core.explorer import Explorer
 from tslam.core.topomap import MapFormatError, TopoMap
 from tslam.programs.map_files import load_map, save_map
 from tslam.programs.output import write_text_atomic
@@ -34,6 +36,7 @@ class Store:
         self.dir = directory
         self.map_path = directory / "map.json"
         self.state_path = directory / "daemon_state.json"
+        self._held_out: frozenset[int] = frozenset()  # the nodes the last saved map left out
 
     def prepare(self) -> None:
         try:
@@ -53,6 +56,17 @@ class Store:
 
     def save_map(self, tmap: TopoMap) -> None:
         save_map(self.map_path, tmap)
+
+    def save_settled(self, explorer: Explorer, changed: bool = True) -> bool:
+        """Save ``explorer``'s settled map if its map ``changed``, or if the nodes it leaves
+        out did (a place's look-alikes given up on changes no node: its nodes are kept as
+        new, and belong in the stored map from then on). Whether it saved."""
+        held_out = explorer.unsettled()
+        if not changed and held_out == self._held_out:
+            return False
+        save_map(self.map_path, explorer.settled_map())
+        self._held_out = held_out
+        return True
 
     def load_orders(self) -> Orders:
         if not self.state_path.exists():
