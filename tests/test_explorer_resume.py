@@ -14,8 +14,10 @@ from __future__ import annotations
 import math
 
 from hal.registry import create_backend
+from sim_backend.backend import SimBackend
 from sim_backend.explore_scoring import score_exploration
 from sim_backend.ground_truth import compute_gvg
+from sim_backend.world import PolygonWorld, StartPose
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.topomap import TopoMap
 
@@ -127,3 +129,34 @@ def test_killed_with_a_question_open_the_robot_restarts_from_the_settled_map():
     )
     assert score["false_merges"] == 0 and score["duplicate_nodes"] == 0 and score["covered"]
     assert not restart(killed.map).done  # the whole map, its open question and all
+
+
+def test_restarted_elsewhere_the_robot_places_itself_on_a_dead_end_read_nearer():
+    """fig1 mapped whole, restarted in its top right room (not where it first started): the
+    placement was proven, but the merge would have made a dead end read 0.29 m from its corner
+    the one read at 0.44 m, and a boundary point's clearance was compared as a meet point's
+    is. The copies stayed in the map as ambiguities (27 nodes for 23). A dead end's clearance
+    is where the boundary rule stopped the robot, and no longer keeps a merge from it."""
+    first = create_backend({"backend": "sim", "world": "fig1", "seed": 1, "drift": "paper"})
+    robot = first.robot
+    mapped = Explorer(first.limits, truth=lambda: (robot.true_pose().x, robot.true_pose().y))
+    _run(mapped, first, 3000.0)
+    assert mapped.done
+    stored = TopoMap.from_dict(mapped.settled_map().to_dict())
+
+    template = create_backend({"backend": "sim", "world": "fig1", "seed": 101, "drift": "paper"})
+    w = template.world
+    world = PolygonWorld(w.name, w.boundary, w.obstacles, StartPose(5.6, 10.9, 1.0))
+    again = SimBackend(world, template.params, 101)
+    robot = again.robot
+    ex = Explorer(again.limits, tmap=stored,
+                  truth=lambda: (robot.true_pose().x, robot.true_pose().y))  # fmt: skip
+    _run(ex, again, 3000.0)
+    assert ex.done and ex.merges
+    score = score_exploration(
+        compute_gvg(world),
+        ex.map.to_dict(),
+        [[(d, r, td, tr) for d, r, td, tr in m.pairs] for m in ex.merges],
+    )
+    assert score["false_merges"] == 0 and score["duplicate_nodes"] == 0 and score["covered"]
+    assert not any(n.ambiguous_with for n in ex.map.nodes())

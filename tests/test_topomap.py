@@ -916,3 +916,18 @@ def test_a_merge_that_zips_onto_a_node_that_looks_otherwise_raises_when_told_to_
         m.merge(n1, n5, k, LIKE)
     m2, (a, _), _, (c, _), (d, _), k2 = two_sightings(4.2, clearance=1.05)
     assert set(m2.merge(a, c, k2, LIKE).nodes) == {c, d}
+
+
+def test_a_merge_zips_onto_a_dead_end_whatever_clearance_it_was_read_with():
+    """A boundary point's clearance is where the boundary rule stopped the robot (0.45 m with
+    the corner ahead, nearer where the gap pinches): fig1's corner read 0.44 m and 0.29 m kept a
+    proven placement from merging. A meet point's clearance still counts."""
+    m, (n1, p1), _, (n5, p5), _, k = two_sightings(4.0)
+    b1 = m.add_boundary(0.44, pose=(-2.0, 0.0))
+    b5 = m.add_boundary(0.25, pose=(-2.0, 0.3))
+    m.connect(n1, p1["prev"], b1, 0, 1.5)
+    m.connect(n5, p5["prev"], b5, 0, 1.5)
+    assert m.plan_merge(n1, n5, k, LIKE).nodes[b5] == (b1, 0)
+    m2, (a, _), _, (c, _), _, k2 = two_sightings(4.0, clearance=1.6)
+    with pytest.raises(MapError, match="which looks otherwise"):
+        m2.plan_merge(a, c, k2, LIKE)
