@@ -131,32 +131,59 @@ def test_killed_with_a_question_open_the_robot_restarts_from_the_settled_map():
     assert not restart(killed.map).done  # the whole map, its open question and all
 
 
-def test_restarted_elsewhere_the_robot_places_itself_on_a_dead_end_read_nearer():
-    """fig1 mapped whole, restarted in its top right room (not where it first started): the
-    placement was proven, but the merge would have made a dead end read 0.29 m from its corner
-    the one read at 0.44 m, and a boundary point's clearance was compared as a meet point's
-    is. The copies stayed in the map as ambiguities (27 nodes for 23). A dead end's clearance
-    is where the boundary rule stopped the robot, and no longer keeps a merge from it."""
-    first = create_backend({"backend": "sim", "world": "fig1", "seed": 1, "drift": "paper"})
+def _restarted_elsewhere(seed: int, params: ExplorerParams | None = None):
+    """fig1 mapped whole (noise seed ``seed``), then restarted against that map in its top
+    right room, not where it first started (noise seed ``seed`` + 100)."""
+    first = create_backend({"backend": "sim", "world": "fig1", "seed": seed, "drift": "paper"})
     robot = first.robot
     mapped = Explorer(first.limits, truth=lambda: (robot.true_pose().x, robot.true_pose().y))
     _run(mapped, first, 3000.0)
     assert mapped.done
     stored = TopoMap.from_dict(mapped.settled_map().to_dict())
-
-    template = create_backend({"backend": "sim", "world": "fig1", "seed": 101, "drift": "paper"})
+    template = create_backend(
+        {"backend": "sim", "world": "fig1", "seed": seed + 100, "drift": "paper"}
+    )
     w = template.world
     world = PolygonWorld(w.name, w.boundary, w.obstacles, StartPose(5.6, 10.9, 1.0))
-    again = SimBackend(world, template.params, 101)
+    again = SimBackend(world, template.params, seed + 100)
     robot = again.robot
-    ex = Explorer(again.limits, tmap=stored,
+    ex = Explorer(again.limits, params=params, tmap=stored,
                   truth=lambda: (robot.true_pose().x, robot.true_pose().y))  # fmt: skip
     _run(ex, again, 3000.0)
-    assert ex.done and ex.merges
     score = score_exploration(
         compute_gvg(world),
         ex.map.to_dict(),
         [[(d, r, td, tr) for d, r, td, tr in m.pairs] for m in ex.merges],
     )
-    assert score["false_merges"] == 0 and score["duplicate_nodes"] == 0 and score["covered"]
-    assert not any(n.ambiguous_with for n in ex.map.nodes())
+    return ex, score
+
+
+def _whole(ex: Explorer, score: dict) -> bool:
+    return bool(
+        ex.done
+        and score["false_merges"] == 0
+        and score["duplicate_nodes"] == 0
+        and score["covered"]
+        and not any(n.ambiguous_with for n in ex.map.nodes())
+    )
+
+
+def test_restarted_elsewhere_the_robot_places_itself_on_a_dead_end_read_nearer():
+    """Seed 1: the placement was proven, but the merge would have made a dead end read 0.29 m
+    from its corner the one read at 0.44 m, and a boundary point's clearance was compared as a
+    meet point's is. The copies stayed in the map as ambiguities (27 nodes for 23). A dead
+    end's clearance is where the boundary rule stopped the robot, and no longer keeps a merge
+    from it."""
+    ex, score = _restarted_elsewhere(1)
+    assert ex.merges and _whole(ex, score)
+
+
+def test_restarted_elsewhere_a_dead_end_reached_deeper_confirms_the_placement():
+    """Seed 2: stopped nearer the walls than when it was mapped, the robot reached a dead end
+    0.68 m out where the map has it 0.40 m out, and the true placement was refuted there; the
+    restarted robot mapped the building anew (68 nodes). The length may now be longer by half
+    as far again as the robot stopped nearer."""
+    ex, score = _restarted_elsewhere(2)
+    assert ex.merges and _whole(ex, score)
+    ex, score = _restarted_elsewhere(2, ExplorerParams(dead_end_depth=0.0))
+    assert not _whole(ex, score)

@@ -148,6 +148,9 @@ class ExplorerParams:
     # stored map of one edge can confirm once only (fig12 seeds 2, 4 and 6 killed after one
     # edge: the stored pair was left beside the places it is, 8 nodes for 6).
     place_stored: bool = True
+    # An edge to a dead end, reached again with the robot stopped this much nearer the walls,
+    # may be longer by this many times as much (``_dead_end_tol``; 0: off).
+    dead_end_depth: float = 1.5
     # A new node's look-alikes include the nodes of the open fragment no hypothesis places
     # any more (``_new_edge``): the fragment may close onto itself (``_loops_apart``).
     close_fragment: bool = True
