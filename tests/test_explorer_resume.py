@@ -131,20 +131,28 @@ def test_killed_with_a_question_open_the_robot_restarts_from_the_settled_map():
     assert not restart(killed.map).done  # the whole map, its open question and all
 
 
-def _restarted_elsewhere(seed: int, params: ExplorerParams | None = None):
-    """fig1 mapped whole (noise seed ``seed``), then restarted against that map in its top
-    right room, not where it first started (noise seed ``seed`` + 100)."""
-    first = create_backend({"backend": "sim", "world": "fig1", "seed": seed, "drift": "paper"})
+FIG1_TOP_RIGHT = StartPose(5.6, 10.9, 1.0)
+
+
+def _restarted_elsewhere(
+    seed: int,
+    params: ExplorerParams | None = None,
+    name: str = "fig1",
+    start: StartPose = FIG1_TOP_RIGHT,
+):
+    """``name`` mapped whole (noise seed ``seed``), then restarted against that map at
+    ``start`` (fig1: its top right room), not where it first started (noise seed + 100)."""
+    first = create_backend({"backend": "sim", "world": name, "seed": seed, "drift": "paper"})
     robot = first.robot
     mapped = Explorer(first.limits, truth=lambda: (robot.true_pose().x, robot.true_pose().y))
     _run(mapped, first, 3000.0)
     assert mapped.done
     stored = TopoMap.from_dict(mapped.settled_map().to_dict())
     template = create_backend(
-        {"backend": "sim", "world": "fig1", "seed": seed + 100, "drift": "paper"}
+        {"backend": "sim", "world": name, "seed": seed + 100, "drift": "paper"}
     )
     w = template.world
-    world = PolygonWorld(w.name, w.boundary, w.obstacles, StartPose(5.6, 10.9, 1.0))
+    world = PolygonWorld(w.name, w.boundary, w.obstacles, start)
     again = SimBackend(world, template.params, seed + 100)
     robot = again.robot
     ex = Explorer(again.limits, params=params, tmap=stored,
@@ -172,9 +180,13 @@ def test_restarted_elsewhere_the_robot_places_itself_on_a_dead_end_read_nearer()
     """Seed 1: the placement was proven, but the merge would have made a dead end read 0.29 m
     from its corner the one read at 0.44 m, and a boundary point's clearance was compared as a
     meet point's is. The copies stayed in the map as ambiguities (27 nodes for 23). A dead
-    end's clearance is where the boundary rule stopped the robot, and no longer keeps a merge
-    from it."""
+    end's clearance is where the boundary rule stopped the robot, and no longer tells places
+    apart. fig12 seed 2 restarted at (4.0, 1.2): its dead end read 0.29 m, mapped at 0.45 m,
+    refuted every placement, and the robot's own map of the room stood beside the stored
+    one (12 nodes for 6)."""
     ex, score = _restarted_elsewhere(1)
+    assert ex.merges and _whole(ex, score)
+    ex, score = _restarted_elsewhere(2, name="fig12", start=StartPose(4.0, 1.2, 0.0))
     assert ex.merges and _whole(ex, score)
 
 

@@ -928,6 +928,7 @@ def test_a_merge_zips_onto_a_dead_end_whatever_clearance_it_was_read_with():
     m.connect(n1, p1["prev"], b1, 0, 1.5)
     m.connect(n5, p5["prev"], b5, 0, 1.5)
     assert m.plan_merge(n1, n5, k, LIKE).nodes[b5] == (b1, 0)
+    assert rotations(m.signature(b5), m.signature(b1), 0.15, 0.44) == [0]
     m2, (a, _), _, (c, _), _, k2 = two_sightings(4.0, clearance=1.6)
     with pytest.raises(MapError, match="which looks otherwise"):
         m2.plan_merge(a, c, k2, LIKE)

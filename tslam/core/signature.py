@@ -63,7 +63,12 @@ def rotations(
     """
     if a.kind != b.kind or a.degree != b.degree or a.degree == 0:
         return []
-    if abs(a.clearance_m - b.clearance_m) > clearance_tol_m:
+    # A dead end's clearance is where the boundary rule stopped the robot (0.45 m with the
+    # corner ahead, nearer where the gap pinches), not a feature of the place: fig1's corner
+    # read 0.44 m and 0.29 m kept a restarted robot's proven placement from merging, and its
+    # copies stayed as ambiguities (seed 1); fig12's read 0.45 m and 0.29 m kept a whole
+    # stored map from fitting the robot's new one (seed 2 restarted at (4.0, 1.2)).
+    if a.kind != "boundary" and abs(a.clearance_m - b.clearance_m) > clearance_tol_m:
         return []
     n = a.degree
     ga, gb = cyclic_gaps(a.departures_rad), cyclic_gaps(b.departures_rad)

@@ -500,11 +500,7 @@ class TopoMap:
                     f" the same place as {nx_.kind} {x} (degree {nx_.degree})"
                 )
             rel = (k + sx - sy) % nx_.degree
-            # A dead end's clearance is where the boundary rule stopped the robot (0.45 m
-            # with the corner ahead, nearer where the gap pinches), not a feature of the
-            # place: fig1's corner read 0.44 m and 0.29 m kept a restarted robot's proven
-            # placement from merging, and its copies stayed as ambiguities (seed 1).
-            if alike is not None and rx != ry and nx_.kind != "boundary":
+            if alike is not None and rx != ry:
                 fits = rotations(
                     self.signature(ry), self.signature(rx), alike.clearance_m, alike.angle_rad
                 )
