@@ -100,7 +100,7 @@ def test_killed_with_a_question_open_the_robot_restarts_from_the_settled_map():
     """Seed 1 killed after three edges: the robot had come round to the loop's first
     junction and was testing whether the node it stood at was that one (two hypotheses open).
     Stored with the rest, the node stood beside the place it was; the restarted robot found
-    every place fitting both copies alike and mapped the room anew for hours (79 nodes after
+    every place fitting both copies alike and mapped the room anew for hours (104 nodes after
     6000 s). The settled map leaves the open question's nodes out, and the restart is one
     from the two nodes and the edge that were settled."""
     first = _backend()
