@@ -1,5 +1,5 @@
 """The daemon's control loop: the hal lifecycle around a fixed-rate loop of the arbiter,
-the map saved after every change, the state published, operators' commands applied.
+the settled map saved after every change, the state published, operators' commands applied.
 
 Order of things in one cycle, and why:
 1. commands first, so an operator's stop acts before the next motion command;
