@@ -151,7 +151,8 @@ class ExplorerState:
         return out
 
     def unsettled(self) -> frozenset[int]:
-        """The nodes ``settled_map`` leaves out."""
+        """The nodes of the open question: ``settled_map`` leaves them out (and any node that
+        leaves without an edge)."""
         if not self.hyps.live:
             return frozenset()
         return frozenset(n for n in self.hyps.fragment if self.map.has_node(n))

@@ -54,9 +54,6 @@ class Store:
         except MapFormatError as exc:
             raise StoreError(f"{exc} (left untouched; move it away to start a new map)") from None
 
-    def save_map(self, tmap: TopoMap) -> None:
-        save_map(self.map_path, tmap)
-
     def save_settled(self, explorer: Explorer, changed: bool = True) -> bool:
         """Save ``explorer``'s settled map if its map ``changed``, or if the nodes it leaves
         out did (a place's look-alikes given up on changes no node: its nodes are kept as
