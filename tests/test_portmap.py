@@ -57,3 +57,31 @@ def test_two_edges_more_or_fewer_is_another_place():
     ports = [R(a) for a in (0, 72, 144, 216, 288)]
     seen = [R(a) for a in (0, 120, 240)]
     assert match_by_angle(seen, 0, ports, 0, R(25)) is None
+
+
+def test_a_close_pair_come_at_from_its_other_point_matches_turned_as_a_whole():
+    # fig13 seed 3's 0.29 m pair: mapped from its west point with three edges, the east one
+    # merged at 330; come back along that edge and read from the east point with both
+    # points' four, the arrival edge (the east point's own, at 1) is 31 degrees off its port.
+    ports = [R(a) for a in (72, 188, 330)]
+    seen = [R(a) for a in (1, 73, 186, 295)]
+    assert match_by_angle(seen, 0, ports, 2, R(25)) is None
+    pm = match_by_angle(seen, 0, ports, 2, R(25), arrival_slack_rad=R(45))
+    assert pm is not None and pm.arrival == 2
+    assert pm.index == (1, 2, 0)
+
+
+def test_a_turned_match_wants_every_other_departure_to_agree():
+    ports = [R(a) for a in (72, 188, 330)]
+    seen = [R(a) for a in (1, 73, 140, 295)]  # 188 has no counterpart within 25 degrees
+    assert match_by_angle(seen, 0, ports, 2, R(25), arrival_slack_rad=R(45)) is None
+
+
+def test_a_turned_match_keeps_the_arrival_within_its_slack_and_the_turn_within_drift():
+    ports = [R(a) for a in (72, 188, 330)]
+    seen = [R(a) for a in (250, 73, 186, 295)]  # the arrival 80 degrees off its port
+    # Turned by -115 degrees, 73 and 295 fit 188 and 72 and the arrival falls 35 degrees off.
+    assert match_by_angle(seen, 0, ports, 2, R(25), arrival_slack_rad=R(45)) is not None
+    # Dead reckoning does not turn that far between two readings of one place.
+    kw = {"arrival_slack_rad": R(45), "max_turn_rad": R(40)}
+    assert match_by_angle(seen, 0, ports, 2, R(25), **kw) is None

@@ -15,11 +15,13 @@ import math
 
 import pytest
 
+from hal.interfaces import NOMAD200_LIMITS
 from hal.registry import create_backend
+from hal.types import Odometry
 from sim_backend.ground_truth import compute_gvg
 from tests.tracer_paths import before_stop38
 from tslam.core.explorer import Explorer
-from tslam.core.tracer import MeetPointReached, TracerParams
+from tslam.core.tracer import MeetPointReached, Tracer, TracerParams
 
 TAU = 2.0 * math.pi
 
@@ -91,3 +93,21 @@ def test_without_the_approach_the_wandering_tangent_names_the_wrong_edge():
         came = min(range(len(deps)), key=lambda i: _angdiff(deps[i], back))
         wrong += named != came
     assert wrong >= 1
+
+
+@pytest.mark.parametrize("short", [0.15, 0.0])
+def test_on_a_short_edge_the_arrival_is_from_where_the_robot_departed(short):
+    """fig13 seed 3: 0.35 m west from one point of its 0.53 m pair to the other, homing
+    began with the trace law's tangent swung round to point east. Less than
+    ``approach_look_m`` from the departure, the way since the departure says where the robot
+    came from (``approach_short_m``; 0: the tangent, as before)."""
+    tracer = Tracer(NOMAD200_LIMITS, TracerParams(approach_short_m=short))
+    s = tracer.s
+    s.depart_from = (1.42, 4.58)
+    s.trail.extend([(34.61, 1.27, 4.59), (34.70, 1.18, 4.60)])
+    odo = Odometry(1.07, 4.60, math.pi, 0.0, 34.80, 34.80)
+    dx, dy = tracer._came_along(odo, (0.97, 0.25))
+    if short:
+        assert dx < -0.99 and abs(dy) < 0.1  # westward, as the robot drove
+    else:
+        assert (dx, dy) == (0.97, 0.25)

@@ -170,12 +170,23 @@ class Arrival(ExplorerState):
             if angdiff(now[i], b) <= tol and i not in carry.values():
                 carry[p] = i
         explored = [p for p, e in enumerate(n.ports) if e is not None]
+        if len(carry) < n.degree - 1 or any(p not in carry for p in explored):
+            return None
+        return self._become_place(ev, node, carry, None)
+
+    def _become_place(
+        self, ev: MeetPointReached, node: int, carry: dict[int, int], arrival: int | None
+    ) -> tuple[int, PortMap] | None:
+        """Node ``node`` read again as its place: its ports become ``ev``'s departures, port
+        ``p`` moving to departure ``carry[p]``; None while a hypothesis places the node (its
+        rotation would not survive the new ports)."""
         placed = any(
             node in h.mapping or any(c == node for c, _ in h.mapping.values())
             for h in self.hyps.live
         )
-        if placed or len(carry) < n.degree - 1 or any(p not in carry for p in explored):
+        if placed:
             return None
+        now = ev.departures_rad
         self.map.reread(node, now, ev.clearance_m, carry)
         if self._odo is not None:
             self.born[node] = self._odo.distance_m
@@ -183,7 +194,7 @@ class Arrival(ExplorerState):
         self.frozen = {(x, carry[p]) if x == node else (x, p) for x, p in kept}
         self.bounces = {k: v for k, v in self.bounces.items() if k[0] != node}
         self._note(f"node {node} read again as its place, with {ev.degree} edges")
-        return node, PortMap(tuple(range(ev.degree)), None)
+        return node, PortMap(tuple(range(ev.degree)), arrival)
 
     def _expected(
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, e: int, length: float | None
@@ -242,6 +253,15 @@ class Arrival(ExplorerState):
                 f"node {w} confirmed by edge {e} although read with degree {ev.degree}, "
                 f"not {self.map.node(w).degree}"
             )
+            if self.p.grow_place and ev.degree > self.map.node(w).degree:
+                # The edge the reading has more is the place's, from its other point, which
+                # the map has not seen: fig13 seed 3's 0.29 m pair, mapped from its west
+                # point, read from the east with the east point's dead end besides; left
+                # out, the dead end was never explored and the map never whole.
+                grown = self._become_place(ev, w, dict(enumerate(pm.index)), ev.arrival_index)
+                if grown is not None:
+                    self._misread = None
+                    return grown
             return w, pm
         short = length is not None and length < edge.length_m - tol.length_abs_m
         through = self._through_port(ev) if short else None

@@ -15,6 +15,13 @@ class ExplorerParams:
     merge_evidence: int = 2  # confirmed predictions that prove a single hypothesis ...
     weigh_crowd: bool = True  # ... and more where many old nodes look alike (localize.py)
     weak_through_rad: float = math.radians(40.0)  # "straight on" at a weak meet point
+    # At the end of a known edge, a junction read with an edge more or fewer may have its
+    # arrival edge read this far off the mapped port, the reading turned as a whole (a close
+    # pair come at from its other point: portmap._match_turned; 0: the arrival anchors).
+    pair_turn_rad: float = math.radians(45.0)
+    # ... and read with an edge more, the node becomes the place read, the edge more
+    # unexplored (False: the reading's edge more is left out).
+    grow_place: bool = True
     # The tracer may leave its edge for a moment (a silent patch, a bump) and re-access it.
     # Back on an edge within this (dead-reckoned, so short-range) distance, it is the same one.
     rejoin_m: float = 1.0

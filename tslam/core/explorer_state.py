@@ -222,6 +222,15 @@ class ExplorerState:
             return tol
         return replace(tol, at_least=True, wandered_m=self.wandered_m)
 
+    def _turn_bound(self, node: int) -> float:
+        """How far dead reckoning's heading may have turned since ``node``'s angles were read
+        (pi if they were not read by the robot's own encoders)."""
+        born = self.born.get(node)
+        if born is None or self._odo is None:
+            return math.pi
+        p = self.p
+        return p.heading_base_rad + p.heading_drift_rad_per_m * abs(self._odo.distance_m - born)
+
     def _edge_length(self, measured: float | None) -> float | None:
         """The edge's length from the encoders: the stretch before a weak meet point passed
         through, plus this stretch."""

@@ -52,10 +52,16 @@ def match_by_angle(
     ports_rad: Sequence[float],
     arrival_port: int,
     angle_tol_rad: float,
+    arrival_slack_rad: float = 0.0,
+    max_turn_rad: float = math.pi,
 ) -> PortMap | None:
     """Match the departures seen to a node's ports by their angles from the arrival edge,
     for a reading with one departure more or fewer; None if too few of them agree (at least
-    all but two of the smaller side's, and one besides the arrival)."""
+    all but two of the smaller side's, and one besides the arrival).
+
+    With ``arrival_slack_rad``, failing that, the arrival edge may be read up to that far
+    off its port if every other departure of the smaller side agrees with the reading turned
+    no more than ``max_turn_rad`` as a whole (``_match_turned``)."""
     ns, nm = len(seen_rad), len(ports_rad)
     if abs(ns - nm) != 1:
         return None
@@ -74,9 +80,77 @@ def match_by_angle(
         i = min(others, key=lambda i: _angdiff(rel_seen[i], rel))
         index.append(i)
         agree += _angdiff(rel_seen[i], rel) <= angle_tol_rad
-    if agree < max(1, min(ns, nm) - 2):
+    if agree >= max(1, min(ns, nm) - 2):
+        return PortMap(tuple(index), arrival_port)
+    if arrival_slack_rad <= 0.0:
         return None
-    return PortMap(tuple(index), arrival_port)
+    return _match_turned(
+        seen_rad,
+        arrival_index,
+        ports_rad,
+        arrival_port,
+        angle_tol_rad,
+        arrival_slack_rad,
+        max_turn_rad,
+    )
+
+
+def _match_turned(
+    seen_rad: Sequence[float],
+    a: int,
+    ports_rad: Sequence[float],
+    q: int,
+    tol: float,
+    slack: float,
+    max_turn: float,
+) -> PortMap | None:
+    """The match of ``match_by_angle`` with the arrival edge read askew. At a pair of meet
+    points closer than the robot is wide, the edge the robot came in by and the one the map
+    has for it leave from different points of the pair: fig13's 0.29 m pair, come at from its
+    east point and read with both points' edges, had its arrival 30 degrees off the port
+    mapped from the west point, and every other departure turned 30 degrees with it. The
+    departures are matched by one turn of the whole reading instead, taken from a pair of
+    them other than the arrival's, no larger than ``max_turn`` (dead reckoning's heading
+    drift since the node was read: the two readings are in one odometry frame); every other
+    departure of the smaller side must agree within ``tol``, the arrival within ``slack``,
+    and only one matching may do so."""
+    ns, nm = len(seen_rad), len(ports_rad)
+    found: set[tuple[int, ...]] = set()
+    for i0 in range(ns):
+        for p0 in range(nm):
+            if i0 == a or p0 == q:
+                continue
+            turn = seen_rad[i0] - ports_rad[p0]
+            if _angdiff(turn, 0.0) > max_turn or _angdiff(seen_rad[a] - turn, ports_rad[q]) > slack:
+                continue
+            index = []
+            for p in range(nm):
+                if p == q:
+                    index.append(a)
+                    continue
+                others = (i for i in range(ns) if ns < nm or i != a)
+                index.append(min(others, key=lambda i: _angdiff(seen_rad[i] - turn, ports_rad[p])))
+            if ns > nm:
+                ok = len(set(index)) == nm and all(
+                    _angdiff(seen_rad[index[p]] - turn, ports_rad[p]) <= tol
+                    for p in range(nm)
+                    if p != q
+                )
+            else:
+                ok = all(
+                    any(
+                        _angdiff(seen_rad[i] - turn, ports_rad[p]) <= tol
+                        for p in range(nm)
+                        if p != q
+                    )
+                    for i in range(ns)
+                    if i != a
+                )
+            if ok:
+                found.add(tuple(index))
+    if len(found) != 1:
+        return None
+    return PortMap(found.pop(), q)
 
 
 def _angdiff(a: float, b: float) -> float:

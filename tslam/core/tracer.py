@@ -73,6 +73,13 @@ class TracerParams:
     # the robot stood 6 cm off it, one wall's echo dropped out, and the three left defined the
     # corridor's meet point 0.4 m away, where the sweep then rejected it (0: off).
     home_keep_m: float = 0.0
+    # Homing onto a sweep's estimate goes there by dead reckoning while the ring's nearest
+    # echo is this much further than the sweep's nearest obstacle: the ring does not hear
+    # the obstacle that put the point there. fig13's meet point 9 (seed 3): a cabinet's
+    # corner 0.78 m off, heard by the sweep, now and then by the ring; the ring's three (two
+    # walls and a table's corner) were equidistant where the robot stood, 0.44 m off the
+    # point, and it settled there three times and traced on (0: the ring's estimate).
+    home_unheard_m: float = 0.15
     home_jump_m: float = 0.2
     # The ring's three nearest define the point homing goes to only while they are nearly
     # equidistant (d3 - d1 within this; 0: always). When one of the point's echoes drops out,
@@ -211,6 +218,9 @@ class TracerParams:
     left_meet_travel_m: float = 2.0  # ... unless the robot has travelled this far since
     approach_keep_m: float = 1.0  # homing that began this close still arrives by that edge
     approach_look_m: float = 0.5  # the arrival direction: from where the robot was this far back
+    # ... or, less far from the departure, from where it departed if this far (0: the trace
+    # law's tangent)
+    approach_short_m: float = 0.15
     # The edge the robot came in by is one of the meet point's edges even where the sweep does
     # not show it: a room's meet point 2.9 m from its 1 m door hears the jambs 19 degrees apart,
     # inside one beam, and read office:1's degree-4 meet point 94 with three edges, none
@@ -283,6 +293,8 @@ class _State:
     sweep: Sweep | None = None
     swept_again: bool = False  # the sweep was doubtful and the turret has turned once more
     home_target: tuple[float, float] | None = None  # homing's last estimate, odometry frame
+    # The sweep's nearest obstacle (odometry frame) when homing goes to the sweep's estimate.
+    home_swept: tuple[float, float] | None = None
     home_seen: float = 0.0  # when the ring last gave that estimate
     depart_dir: float = 0.0
     depart_from: tuple[float, float] = (0.0, 0.0)
@@ -665,6 +677,19 @@ class Tracer:
         s, p = self.s, self.p
         if s.behaviour is Behaviour.SETTLE:
             return self._settle(odo, now, events)
+        if s.home_swept is not None and s.home_target is not None:
+            near = math.hypot(s.home_swept[0] - odo.x_m, s.home_swept[1] - odo.y_m)
+            if not obs or obs[0].distance_m > near + p.home_unheard_m:
+                held = s.home_target
+                target = _to_robot((held[0] - odo.x_m, held[1] - odo.y_m), odo)
+                if math.hypot(*target) < p.settle_tol_m:
+                    s.home_swept = None
+                    s.behaviour = Behaviour.SETTLE
+                    s.since = now
+                    s.sweep = Sweep(start_s=now)
+                    return Twist(0.0, 0.0, p.sweep_radps)
+                return laws.homing_velocity(target, p.home_gain, p.home_max_mps)
+        s.home_swept = None
         spread_ok = p.home_spread_m <= 0.0 or laws.equidistant(obs, 3, p.home_spread_m)
         target = laws.circumcentre(*obs[:3]) if len(obs) >= 3 and spread_ok else None
         if target is not None and self._jumped(target, odo, now):
@@ -758,6 +783,9 @@ class Tracer:
             # at all (a cabinet's corner 45 degrees from a wall, fig13's meet point 0).
             s.home_target = _add(_to_odom(swept, odo), odo)
             s.home_seen = now
+            # Metres off, the sweep missed one of the point's obstacles, not the ring.
+            near = p.home_unheard_m > 0.0 and obs and math.hypot(*swept) <= p.meet_radius_m
+            s.home_swept = _add(_to_odom((obs[0].x_m, obs[0].y_m), odo), odo) if near else None
             return None
         s.settle_tries = 0
         converged = swept is not None and math.hypot(*swept) <= p.converge_tol_m
@@ -865,6 +893,16 @@ class Tracer:
         of travel ago (dead reckoning is good over that), else the trace law's tangent."""
         s, p = self.s, self.p
         back = [q for q in s.trail if q[0] <= odo.distance_m - p.approach_look_m]
+        if not back and s.trail and p.approach_short_m > 0.0:
+            # A short edge: the way since the departure is all there is behind. The trace
+            # law's tangent is no guide here: between a close pair's nearly equidistant
+            # walls it swings round (fig13 seed 3: 0.35 m west from one point of its 0.53 m
+            # pair to the other with the tangent pointing east, and the edge was mapped on
+            # the departure opposite the one it came in by).
+            dx, dy = odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1]
+            n = math.hypot(dx, dy)
+            if n >= p.approach_short_m and odo.distance_m - s.trail[0][0] < p.approach_look_m:
+                return dx / n, dy / n
         if not back or odo.distance_m - back[-1][0] > 2.0 * p.approach_look_m:
             return tangent  # a detour or a fresh start since: no straight stretch behind
         _, x, y = back[-1]

@@ -291,7 +291,13 @@ class Unhomed(ExplorerState):
         ):
             return None
         return match_by_angle(
-            ev.departures_rad, ev.arrival_index, wn.departures_rad, q, tol.angle_rad
+            ev.departures_rad,
+            ev.arrival_index,
+            wn.departures_rad,
+            q,
+            tol.angle_rad,
+            self.p.pair_turn_rad,
+            self._turn_bound(w),
         )
 
     def _walk(self, length: float | None, back: bool) -> Walk | None:
