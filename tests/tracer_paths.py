@@ -15,12 +15,19 @@ from tslam.core.explorer import ExplorerParams
 from tslam.core.tracer import TracerParams
 
 
+def before_stop44(params: TracerParams) -> TracerParams:
+    """``params`` as up to stop 43: homing onto a sweep's estimate by the ring whatever it
+    hears, and the arrival on a short edge from the trace law's tangent."""
+    return replace(params, home_unheard_m=0.0, approach_short_m=0.0)
+
+
 def before_stop42(params: TracerParams) -> TracerParams:
     """``params`` as up to stop 41: no doorway's jambs kept apart as the edge's pair, no
     arming on access, no way in kept as an edge of its own, a departure's pair may have one
-    obstacle dead ahead, and no swing of the trace law's tangent coasted through."""
+    obstacle dead ahead, and no swing of the trace law's tangent coasted through; and as
+    ``before_stop44``."""
     return replace(
-        params,
+        before_stop44(params),
         doorway_pairs=False,
         arm_on_access=False,
         unseen_way_in_rad=0.0,

@@ -243,7 +243,11 @@ class Arrival(ExplorerState):
                 self.estimated.discard(e)
             self.partial_m = 0.0
             return w, k
-        pm = self._read_otherwise(ev, w, q, length, edge.length_m, slack)
+        # Dead reckoning that puts the robot elsewhere than where it left for the dead end
+        # vetoes an arrival read askew (a twin junction, as above).
+        pm = self._read_otherwise(
+            ev, w, q, length, edge.length_m, slack, turned=left_here is not False
+        )
         if pm is not None:
             if length is not None and not self.disturbed:
                 self.map.add_measurement(e, length)

@@ -273,13 +273,15 @@ class Unhomed(ExplorerState):
         length: float | None,
         mapped: float,
         slack_m: float = 0.0,
+        turned: bool = True,
     ) -> PortMap | None:
         """The port map if the meet point at the end of a known edge is its node read with
         one edge more or fewer (section VII-B's close meet points, a weak meet point): the
         edge's length agrees (only as a lower bound after a detour), so do the angles of all
         but the edge that differs, and so does the clearance, as far as two points of one
         place can differ: fig16's two are 0.91 m and 1.14 m clear, and its place, read at the
-        weak one, was not recognised at the corridor's one."""
+        weak one, was not recognised at the corridor's one. With ``turned``, the arrival edge
+        may be read askew (``ExplorerParams.pair_turn_rad``)."""
         tol, wn = self._tol(slack_m), self.map.node(w)
         if (
             ev.arrival_index is None
@@ -296,7 +298,7 @@ class Unhomed(ExplorerState):
             wn.departures_rad,
             q,
             tol.angle_rad,
-            self.p.pair_turn_rad,
+            self.p.pair_turn_rad if turned else 0.0,
             self._turn_bound(w),
         )
 
