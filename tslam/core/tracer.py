@@ -784,7 +784,7 @@ class Tracer:
             s.home_target = _add(_to_odom(swept, odo), odo)
             s.home_seen = now
             # Metres off, the sweep missed one of the point's obstacles, not the ring.
-            near = p.home_unheard_m > 0.0 and obs and math.hypot(*swept) <= p.meet_radius_m
+            near = p.home_unheard_m > 0.0 and bool(obs) and math.hypot(*swept) <= p.meet_radius_m
             s.home_swept = _add(_to_odom((obs[0].x_m, obs[0].y_m), odo), odo) if near else None
             return None
         s.settle_tries = 0
@@ -890,7 +890,8 @@ class Tracer:
 
     def _came_along(self, odo: Odometry, tangent: tuple[float, float]) -> tuple[float, float]:
         """The direction the robot came in along: from where it traced ``approach_look_m``
-        of travel ago (dead reckoning is good over that), else the trace law's tangent."""
+        of travel ago (dead reckoning is good over that), on a shorter edge from where it
+        departed (``approach_short_m``), else the trace law's tangent."""
         s, p = self.s, self.p
         back = [q for q in s.trail if q[0] <= odo.distance_m - p.approach_look_m]
         if not back and s.trail and p.approach_short_m > 0.0:
