@@ -291,9 +291,16 @@ class Arrival(ExplorerState):
         # Homed past a weak meet point: one edge further than planned (section V-B). The
         # robot then came by w's edge, so the way back leads to w, whatever f is: back from
         # a dead end it is a meet point (fig13 seed 1: past meet point 8 to 9, and lost).
+        # Only where no unexplored departure of w could have led to a look-alike instead:
+        # back from fig15's corner the robot went through its junction along the aisle,
+        # unexplored, to the next crossing, and was "recognised" one edge up the other aisle,
+        # as long and alike (seed 2 on stop 44's tracer: a false merge). The walk below
+        # follows the way's own turn there.
         found = []
         seen_past = self._seen(ev, a, w)
-        for p, e2 in enumerate(self.map.node(w).ports):
+        ports = self.map.node(w).ports
+        unknown_way = any(e2 is None for p, e2 in enumerate(ports) if p != q)
+        for p, e2 in enumerate(ports):
             if e2 is None or p == q:
                 continue
             e2d = self.map.edge(e2)
@@ -301,7 +308,7 @@ class Arrival(ExplorerState):
             k2 = self._match(ev, seen_past, a, w2, q2, length, edge.length_m + e2d.length_m)
             if k2 is not None:
                 found.append((w2, k2))
-        if len(found) == 1:
+        if len(found) == 1 and not (unknown_way and self.p.further_known_only):
             self._note(f"expected node {w}, recognised node {found[0][0]} one edge further")
             self.partial_m = 0.0
             return found[0]

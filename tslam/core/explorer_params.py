@@ -22,6 +22,10 @@ class ExplorerParams:
     # ... and read with an edge more, the node becomes the place read, the edge more
     # unexplored (False: the reading's edge more is left out).
     grow_place: bool = True
+    # Past the node expected, a node one edge further is recognised by signature and length
+    # only if no unexplored departure of the node passed could have led on instead (False:
+    # whatever the unexplored departures).
+    further_known_only: bool = True
     # The tracer may leave its edge for a moment (a silent patch, a bump) and re-access it.
     # Back on an edge within this (dead-reckoned, so short-range) distance, it is the same one.
     rejoin_m: float = 1.0
