@@ -82,14 +82,17 @@ def test_a_whole_map_explored_is_complete():
 
 def past_the_junction(c_clearance: float) -> tuple[Explorer, int, int, int, int]:
     """Junction J at (0, 0), dead end B 1.5 m east of it, meet point C 2 m along J's 120 deg
-    edge (clearance ``c_clearance``); the robot, back from B, homes where C is after 3.5 m.
-    The explorer, J, B, C and the node the arrival was taken for."""
+    edge (clearance ``c_clearance``), a second dead end 1 m along its 240 deg edge (every way
+    on from J known: ``tests/test_explorer_further.py`` has one unexplored); the robot, back
+    from B, homes where C is after 3.5 m. The explorer, J, B, C and the node the arrival was
+    taken for."""
     ex = Explorer(NOMAD200_LIMITS)
     j = ex.map.add_meet(0.9, [0.0, math.radians(120), math.radians(240)], (0.0, 0.0))
     b = ex.map.add_boundary(0.4, (1.5, 0.0))
     c = ex.map.add_meet(c_clearance, [math.radians(a) for a in (60, 180, 300)], (-1.0, 1.73))
     ex.map.connect(j, 0, b, 0, 1.5)
     ex.map.connect(j, 1, c, 2, 2.0)
+    ex.map.connect(j, 2, ex.map.add_boundary(0.4, (-0.5, -0.87)), 0, 1.0)
     ex.leaving = (b, 0)
     node, _ = ex._arrive(meet(-1.0, 1.73, [60, 180, 300], 300, 3.5))
     return ex, j, b, c, node
@@ -101,7 +104,7 @@ def test_back_from_a_dead_end_through_the_junction_unhomed_is_one_edge_further()
     went lost there (past meet point 8 to 9 at 259 s), for the way back read as leading to a
     boundary point."""
     ex, j, _, c, node = past_the_junction(0.9)
-    assert node == c and len(ex.map.nodes()) == 3
+    assert node == c and len(ex.map.nodes()) == 4
     assert ex.notes[-1].text == f"expected node {j}, recognised node {c} one edge further"
 
 
