@@ -72,3 +72,21 @@ def test_fig13_is_mapped_whole():
     rep = report(run, "fig13", 7, "paper")
     assert rep["finished"] and rep["false_merges"] == 0
     assert rep["duplicate_nodes"] == 0 and rep["covered"] and rep["complete"]
+
+
+def test_a_reading_that_puts_two_ports_on_one_departure_does_not_grow_the_node():
+    """Read with an edge more, but two mapped ports (100 and 120 degrees, both explored)
+    nearest one departure (110): the reading says nothing of the place's edges, so the node
+    stays as mapped (growing it would give two edges one port)."""
+    ex = Explorer(NOMAD200_LIMITS)
+    m = ex.map
+    w = m.add_meet(0.9, [math.radians(a) for a in (0, 100, 120)], (0.0, 0.0))
+    f = m.add_meet(0.9, [math.radians(a) for a in (60, 180, 300)], (3.6, 0.0))
+    m.connect(w, 0, f, 1, 3.6)
+    m.connect(w, 1, m.add_boundary(0.4, (-0.2, 1.0)), 0, 1.0)
+    m.connect(w, 2, m.add_boundary(0.4, (-0.5, 0.9)), 0, 1.0)
+    ex._odo = Odometry(3.6, 0.0, 0.0, 0.0, 10.0, 10.0)
+    ex._leave(f, 1)
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 13.6, 13.6)
+    ex._choose(meet(0.0, 0.0, [0, 110, 250, 300], 0, 3.6))
+    assert ex.here == w and ex.map.node(w).degree == 3

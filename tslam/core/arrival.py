@@ -257,7 +257,9 @@ class Arrival(ExplorerState):
                 f"node {w} confirmed by edge {e} although read with degree {ev.degree}, "
                 f"not {self.map.node(w).degree}"
             )
-            if self.p.grow_place and ev.degree > self.map.node(w).degree:
+            # Each port on a departure of its own, or the reading says nothing of the place.
+            distinct = len(set(pm.index)) == len(pm.index)
+            if self.p.grow_place and ev.degree > self.map.node(w).degree and distinct:
                 # The edge the reading has more is the place's, from its other point, which
                 # the map has not seen: fig13 seed 3's 0.29 m pair, mapped from its west
                 # point, read from the east with the east point's dead end besides; left
