@@ -228,8 +228,11 @@ class ExplorerState:
         born = self.born.get(node)
         if born is None or self._odo is None:
             return math.pi
-        p = self.p
-        return p.heading_base_rad + p.heading_drift_rad_per_m * abs(self._odo.distance_m - born)
+        return self._heading_drift(abs(self._odo.distance_m - born))
+
+    def _heading_drift(self, driven_m: float) -> float:
+        """How far dead reckoning's heading may turn over ``driven_m`` metres."""
+        return self.p.heading_base_rad + self.p.heading_drift_rad_per_m * driven_m
 
     def _edge_length(self, measured: float | None) -> float | None:
         """The edge's length from the encoders: the stretch before a weak meet point passed

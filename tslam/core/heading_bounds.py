@@ -28,10 +28,7 @@ class HeadingBounds(ExplorerState):
         turn = self._turn(deps, c, k)
         if turn is None:
             return True
-        p = self.p
-        return abs(turn[0]) <= p.heading_base_rad + p.heading_drift_rad_per_m * abs(
-            read_at_m - turn[1]
-        )
+        return abs(turn[0]) <= self._heading_drift(abs(read_at_m - turn[1]))
 
     def _turn(self, deps: tuple[float, ...], c: int, k: int) -> tuple[float, float] | None:
         """How far departures ``deps`` are turned from old node ``c``'s under rotation ``k``,

@@ -65,21 +65,14 @@ def match_by_angle(
     ns, nm = len(seen_rad), len(ports_rad)
     if abs(ns - nm) != 1:
         return None
-    rel_seen = [(seen_rad[i] - seen_rad[arrival_index]) % TAU for i in range(ns)]
-    index = []
-    agree = 0
-    for p in range(nm):
-        if p == arrival_port:
-            index.append(arrival_index)
-            continue
-        rel = (ports_rad[p] - ports_rad[arrival_port]) % TAU
-        # Read with one edge fewer, the pair seen as one may be the arrival's: a port beside
-        # the arrival port then leads along the arrival departure too (fig16's indent,
-        # arrived at from one of its two dead ends with the pair read as one edge).
-        others = (i for i in range(ns) if ns < nm or i != arrival_index)
-        i = min(others, key=lambda i: _angdiff(rel_seen[i], rel))
-        index.append(i)
-        agree += _angdiff(rel_seen[i], rel) <= angle_tol_rad
+    # Anchored on the arrival: the reading turned by as much as its arrival edge is off.
+    turn = seen_rad[arrival_index] - ports_rad[arrival_port]
+    index = _nearest(seen_rad, arrival_index, ports_rad, arrival_port, turn)
+    agree = sum(
+        _angdiff(seen_rad[i] - turn, ports_rad[p]) <= angle_tol_rad
+        for p, i in enumerate(index)
+        if p != arrival_port
+    )
     if agree >= max(1, min(ns, nm) - 2):
         return PortMap(tuple(index), arrival_port)
     if arrival_slack_rad <= 0.0:
@@ -123,13 +116,7 @@ def _match_turned(
             turn = seen_rad[i0] - ports_rad[p0]
             if _angdiff(turn, 0.0) > max_turn or _angdiff(seen_rad[a] - turn, ports_rad[q]) > slack:
                 continue
-            index = []
-            for p in range(nm):
-                if p == q:
-                    index.append(a)
-                    continue
-                others = (i for i in range(ns) if ns < nm or i != a)
-                index.append(min(others, key=lambda i: _angdiff(seen_rad[i] - turn, ports_rad[p])))
+            index = _nearest(seen_rad, a, ports_rad, q, turn)
             if ns > nm:
                 ok = len(set(index)) == nm and all(
                     _angdiff(seen_rad[index[p]] - turn, ports_rad[p]) <= tol
@@ -151,6 +138,25 @@ def _match_turned(
     if len(found) != 1:
         return None
     return PortMap(found.pop(), q)
+
+
+def _nearest(
+    seen_rad: Sequence[float], a: int, ports_rad: Sequence[float], q: int, turn: float
+) -> list[int]:
+    """For each port, the departure nearest it with the reading turned back by ``turn``; the
+    arrival port's is the arrival departure ``a``. Read with one edge fewer, the pair seen as
+    one may be the arrival's: a port beside the arrival port then leads along the arrival
+    departure too (fig16's indent, arrived at from one of its two dead ends with the pair read
+    as one edge)."""
+    ns, nm = len(seen_rad), len(ports_rad)
+    index = []
+    for p in range(nm):
+        if p == q:
+            index.append(a)
+            continue
+        others = (i for i in range(ns) if ns < nm or i != a)
+        index.append(min(others, key=lambda i: _angdiff(seen_rad[i] - turn, ports_rad[p])))
+    return index
 
 
 def _angdiff(a: float, b: float) -> float:

@@ -681,14 +681,7 @@ class Tracer:
             near = math.hypot(s.home_swept[0] - odo.x_m, s.home_swept[1] - odo.y_m)
             if not obs or obs[0].distance_m > near + p.home_unheard_m:
                 held = s.home_target
-                target = _to_robot((held[0] - odo.x_m, held[1] - odo.y_m), odo)
-                if math.hypot(*target) < p.settle_tol_m:
-                    s.home_swept = None
-                    s.behaviour = Behaviour.SETTLE
-                    s.since = now
-                    s.sweep = Sweep(start_s=now)
-                    return Twist(0.0, 0.0, p.sweep_radps)
-                return laws.homing_velocity(target, p.home_gain, p.home_max_mps)
+                return self._home_to(_to_robot((held[0] - odo.x_m, held[1] - odo.y_m), odo), now)
         s.home_swept = None
         spread_ok = p.home_spread_m <= 0.0 or laws.equidistant(obs, 3, p.home_spread_m)
         target = laws.circumcentre(*obs[:3]) if len(obs) >= 3 and spread_ok else None
@@ -720,7 +713,13 @@ class Tracer:
         else:
             s.home_target = _add(_to_odom(target, odo), odo)
             s.home_seen = now
+        return self._home_to(target, now)
+
+    def _home_to(self, target: tuple[float, float], now: float) -> tuple[float, float] | Twist:
+        """Home towards ``target`` (robot frame); this close, stand and sweep."""
+        s, p = self.s, self.p
         if math.hypot(*target) < p.settle_tol_m:
+            s.home_swept = None
             s.behaviour = Behaviour.SETTLE
             s.since = now
             s.sweep = Sweep(start_s=now)
