@@ -21,6 +21,7 @@ class Arrival(ExplorerState):
         which of its ports."""
         self._misread = None
         node, rot = self._identify(ev)
+        self._own_readings_back(node)
         if isinstance(rot, PortMap):
             return node, rot
         return node, PortMap.rotation(rot, ev.degree, ev.arrival_index)
@@ -186,13 +187,9 @@ class Arrival(ExplorerState):
         )
         if placed:
             return None
-        now = ev.departures_rad
-        self.map.reread(node, now, ev.clearance_m, carry)
+        self._reread_node(node, ev.departures_rad, ev.clearance_m, carry)
         if self._odo is not None:
             self.born[node] = self._odo.distance_m
-        kept = {(x, p) for x, p in self.frozen if x != node or p in carry}
-        self.frozen = {(x, carry[p]) if x == node else (x, p) for x, p in kept}
-        self.bounces = {k: v for k, v in self.bounces.items() if k[0] != node}
         self._note(f"node {node} read again as its place, with {ev.degree} edges")
         return node, PortMap(tuple(range(ev.degree)), arrival)
 
@@ -355,7 +352,12 @@ class Arrival(ExplorerState):
 
     def _new_edge(
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, length: float | None
-    ) -> tuple[int, int]:
+    ) -> tuple[int, int | PortMap]:
+        own = ev
+        placed = self._as_predicted(ev, seen, f, j, length)
+        if placed is not None:
+            ev = placed.ev
+            seen = self._seen(ev, placed.read.arrival, f)
         a = ev.arrival_index
         assert a is not None
         tol = self._tol()
@@ -369,6 +371,8 @@ class Arrival(ExplorerState):
                 survivors.append(h)
                 continue
             k = arrival_matches(self.map, seen, a, pred, length, tol)
+            if placed is not None and pred.node != placed.node:
+                k = None  # it did not fit the reading as it was (``_as_predicted``)
             # Two new nodes cannot both be one old place: the fragment is a walk through
             # places the robot had not seen since it left the map.
             if k is not None and all(c != pred.node for c, _ in h.mapping.values()):
@@ -380,13 +384,16 @@ class Arrival(ExplorerState):
                     survivors.append(h)
                     past.append((h, went.beyond))
         node = self._add_meet(ev)
+        if placed is not None:
+            self._placed_as_predicted(node, own, placed.read)
         edge = self.map.connect(f, j, node, a, 0.0 if length is None else length)
         lv = self._last_visit
         if lv is not None and lv[0] == f:
             self.edge_gap[edge] = math.hypot(ev.x_m - lv[3], ev.y_m - lv[4])
         for h, w, k in confirmed:
             h.mapping[node] = (w, k)
-            h.confirmed += 1
+            # A reading taken as the predicted place is not evidence for the prediction.
+            h.confirmed += placed is None
         for h, went in past:
             if went is None:  # the old edge went past this junction
                 pred = predict(self.map, h, f, j)
@@ -434,6 +441,12 @@ class Arrival(ExplorerState):
                 + f"{dropped} hypothesis(es) refuted, {len(self.hyps.live)} open"
             )
         self.partial_m = 0.0
+        if placed is not None:
+            self._note(
+                f"node {node}, read with {own.degree} edges, read as the place predicted for it"
+                f" with {ev.degree}"
+            )
+            return node, placed.read
         return node, 0
 
     def _past_a_junction(

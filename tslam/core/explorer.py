@@ -54,6 +54,7 @@ from tslam.core.explorer_params import ExplorerParams
 from tslam.core.explorer_state import TAU
 from tslam.core.heading_bounds import HeadingBounds
 from tslam.core.portmap import PortMap
+from tslam.core.predicted_place import PredictedPlace
 from tslam.core.resolving import Resolving
 from tslam.core.topomap import MapError, Step
 from tslam.core.tracer import Behaviour, BoundaryReached, Event, MeetPointReached
@@ -71,7 +72,7 @@ class Mode(enum.Enum):
     DONE = "done"
 
 
-class Explorer(Arrival, Unhomed, Boundaries, Resolving, HeadingBounds):
+class Explorer(Arrival, PredictedPlace, Unhomed, Boundaries, Resolving, HeadingBounds):
     """``step`` once per control cycle, like the tracer; read ``map``, ``mode``, ``notes``."""
 
     @property

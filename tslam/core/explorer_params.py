@@ -26,6 +26,10 @@ class ExplorerParams:
     # only if no unexplored departure of the node passed could have led on instead (False:
     # whatever the unexplored departures).
     further_known_only: bool = True
+    # A new node that no hypothesis fits as read, but which is, with an edge more or fewer,
+    # the one old node the hypotheses predict there, is read as that place (predicted_place.py;
+    # False: as read, which refutes them).
+    predicted_place: bool = True
     # The tracer may leave its edge for a moment (a silent patch, a bump) and re-access it.
     # Back on an edge within this (dead-reckoned, so short-range) distance, it is the same one.
     rejoin_m: float = 1.0

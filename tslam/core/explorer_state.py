@@ -53,6 +53,18 @@ class Note:
     text: str
 
 
+
+@dataclass(frozen=True)
+class OwnReading:
+    """What the robot read at a node taken as its predicted place (``PredictedPlace``), to
+    give back if no hypothesis places it any more. ``index[p]``: the reading's departure for
+    port ``p``."""
+
+    departures_rad: tuple[float, ...]
+    clearance_m: float
+    index: tuple[int, ...]
+    born_m: float | None  # encoder distance when read
+
 class ExplorerState:
     """The arbiter's state; ``Explorer`` is this with its behaviour mixed in."""
 
@@ -124,6 +136,9 @@ class ExplorerState:
         # being traced left from it: its ports were matched by angle, so which departure
         # the robot took is a guess, and what it finds there tests no hypothesis.
         self._misread: int | None = None
+        # New nodes read as the old place the hypotheses predicted (``_as_predicted``), with
+        # the robot's own reading, given back if no hypothesis places them any more.
+        self.own_reading: dict[int, OwnReading] = {}
         self.unsure_departure = False
         # Nodes whose look-alikes were tested and given up on: a copy of one of them may
         # stand in the map (``_lead_ins``).
@@ -191,6 +206,21 @@ class ExplorerState:
             return None
         ports = self.map.node(self.leaving[0]).ports
         return ports[self.leaving[1]] if self.leaving[1] < len(ports) else None
+
+    def _reread_node(
+        self, node: int, departures_rad: Sequence[float], clearance_m: float, carry: dict[int, int]
+    ) -> None:
+        """Node ``node`` read again: its ports become ``departures_rad``, port ``p`` moving to
+        ``carry[p]``; what is kept by port follows."""
+        self.map.reread(node, departures_rad, clearance_m, carry)
+        self.own_reading.pop(node, None)  # read anew: what it was read as before is moot
+        # Each port on a departure of its own: where to leave by when a later reading sees
+        # two as one (``_departure_bearing``; fig13 seed 9 left the 0.29 m pair's west point
+        # for the east point's dead end by the departure it shares with the east edge).
+        self.port_bearings[node] = tuple(departures_rad)
+        kept = {(x, p) for x, p in self.frozen if x != node or p in carry}
+        self.frozen = {(x, carry[p]) if x == node else (x, p) for x, p in kept}
+        self.bounces = {k: v for k, v in self.bounces.items() if k[0] != node}
 
     def _add_meet(self, ev: MeetPointReached) -> int:
         truth = self.truth() if self.truth else None

@@ -457,6 +457,7 @@ class Resolving(ExplorerState):
                 self.hyps.live.append(kept)
         if self.hyps.live:
             self.hyps.fragment = {x for x in fragment if self.map.has_node(x)}
+        self._grow_merged(renamed)
         return renamed
 
     def _remove_cuts(self, h: Hypothesis) -> None:
