@@ -51,7 +51,6 @@ from hal.types import DriveStatus, Odometry, SonarScan, Twist
 from tslam.core.arrival import Arrival
 from tslam.core.boundaries import Boundaries
 from tslam.core.explorer_params import ExplorerParams
-from tslam.core.explorer_state import TAU
 from tslam.core.heading_bounds import HeadingBounds
 from tslam.core.portmap import PortMap
 from tslam.core.predicted_place import PredictedPlace
@@ -159,18 +158,13 @@ class Explorer(Arrival, PredictedPlace, Unhomed, Boundaries, Resolving, HeadingB
         edges seen as one departure between them, fig16's indent from the corridor's meet
         point): its bearing when the node was last read with every edge apart, turned as the
         ports read apart both times have turned since. None to leave by the reading's."""
-        k, old = pm.index[port], self.port_bearings.get(node)
-        if pm.index.count(k) < 2 or old is None or len(old) != len(pm.index):
+        if pm.index.count(pm.index[port]) < 2:
             return None
-        alone = [p for p, i in enumerate(pm.index) if pm.index.count(i) == 1]
-        if not alone:
+        own = self._port_bearings_read(node, ev.departures_rad, pm)
+        if own is None:
             return None
-        turn = math.atan2(
-            sum(math.sin(ev.departures_rad[pm.index[p]] - old[p]) for p in alone),
-            sum(math.cos(ev.departures_rad[pm.index[p]] - old[p]) for p in alone),
-        )
         self._note(f"node {node}: departure {port} read merged with another; left by its own")
-        return (old[port] + turn) % TAU
+        return own[port]
     def _hold(self, node: int) -> None:
         self.held = True
         if self.goal is not None and node == self.goal:

@@ -53,7 +53,6 @@ class Note:
     text: str
 
 
-
 @dataclass(frozen=True)
 class OwnReading:
     """What the robot read at a node taken as its predicted place (``PredictedPlace``), to
@@ -64,6 +63,7 @@ class OwnReading:
     clearance_m: float
     index: tuple[int, ...]
     born_m: float | None  # encoder distance when read
+
 
 class ExplorerState:
     """The arbiter's state; ``Explorer`` is this with its behaviour mixed in."""
@@ -221,6 +221,23 @@ class ExplorerState:
         kept = {(x, p) for x, p in self.frozen if x != node or p in carry}
         self.frozen = {(x, carry[p]) if x == node else (x, p) for x, p in kept}
         self.bounces = {k: v for k, v in self.bounces.items() if k[0] != node}
+
+    def _port_bearings_read(
+        self, node: int, deps: Sequence[float], pm: PortMap
+    ) -> list[float] | None:
+        """Each port's bearing in the reading ``deps`` of ``node``: its departure's, but for
+        ports that share one (two edges seen as one departure between them) their bearing
+        when last read apart, turned as the ports read apart both times have turned since.
+        None if no port shares a departure, or the node was never read with all apart."""
+        old = self.port_bearings.get(node)
+        alone = [p for p, i in enumerate(pm.index) if pm.index.count(i) == 1]
+        if old is None or len(old) != len(pm.index) or len(alone) in (0, len(pm.index)):
+            return None
+        turn = math.atan2(
+            sum(math.sin(deps[pm.index[p]] - old[p]) for p in alone),
+            sum(math.cos(deps[pm.index[p]] - old[p]) for p in alone),
+        )
+        return [deps[i] if p in alone else (old[p] + turn) % TAU for p, i in enumerate(pm.index)]
 
     def _add_meet(self, ev: MeetPointReached) -> int:
         truth = self.truth() if self.truth else None

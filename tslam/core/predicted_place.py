@@ -101,10 +101,9 @@ class PredictedPlace(ExplorerState):
         self.own_reading[node] = OwnReading(
             ev.departures_rad, ev.clearance_m, pm.index, self.born.get(node)
         )
+        # Two ports on one departure are left by their own bearings (``_departure_bearing``),
+        # and the way out says which was taken (``_departure_taken``).
         self.port_bearings[node] = self.map.node(node).departures_rad
-        if len(set(pm.index)) < len(pm.index):
-            # Two ports on one departure: which the robot leaves by is a guess.
-            self._misread = node
 
     def _own_readings_back(self, here: int) -> None:
         """Nodes read as a predicted place that no hypothesis places any more get their own

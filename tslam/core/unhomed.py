@@ -83,7 +83,8 @@ class Unhomed(ExplorerState):
         out = next(((u, v) for _, u, v in path.points if math.hypot(u - x, v - y) >= reach), None)
         if out is None:
             return None
-        return math.atan2(out[1] - y, out[0] - x), [deps[i] for i in pm.index]
+        ports = self._port_bearings_read(f, deps, pm) or [deps[i] for i in pm.index]
+        return math.atan2(out[1] - y, out[0] - x), ports
 
     def _clearly_out_by(self, f: int, j: int) -> int | None:
         """The port of ``f`` other than ``j`` that the recorded way out is along, clearly
