@@ -2,8 +2,9 @@
 resolve, section VII-B's weak meet points): the map joins the two places either side of it,
 and that one wrong edge refutes the true hypotheses that cross it and keeps the place itself
 from ever being a candidate, so the map copies everything beyond. ``ExplorerParams.cut_past``
-(off by default) repairs such edges (``Explorer._past_a_junction``, ``_past_candidates``,
-``_cut_conflicts``); a junction found partway along a known edge goes into the map
+(on since stop 45) repairs such edges (``Explorer._past_a_junction``, ``_cut_conflicts``),
+and ``past_candidates`` (off) makes such a place a candidate (``_past_candidates``); a
+junction found partway along a known edge goes into the map
 (``split_open``, on); ``verify_edges`` (off) goes back along edges traced once."""
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from tslam.core.localize import Hypothesis
 from tslam.core.tracer import BoundaryReached, MeetPointReached
 
 TAU = 2 * math.pi
-PAST = ExplorerParams(cut_past=True)
+PAST = ExplorerParams(cut_past=True, past_candidates=True)
 # No two alike under any rotation but the identity, so each test has one reading.
 A_DEPS = [0, 100, 230]  # A: its departure 0 deg leads east
 M_DEPS = [0, 90, 180]  # M: the junction east of A, a branch north
@@ -78,7 +79,7 @@ def test_a_prediction_shorter_than_its_edge_keeps_the_hypothesis_and_cuts_the_ed
 
 
 def test_without_the_repair_that_hypothesis_is_refuted():
-    ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(cut_past=False))
+    ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(cut_past=False, past_candidates=False))
     a, b = _add(ex, 1.0, A_DEPS, 0.0), _add(ex, 1.6, B_DEPS, 4.0)
     ex.map.connect(a, 0, b, 1, 4.0)
     _x, h = _x_is_a_again(ex, a)
@@ -176,7 +177,8 @@ def test_fig13_with_meet_point_0_passed_unhomed_once_is_mapped_right(seed):
     passed = passed_once(graph, "0")
     runs = {}
     for on in (True, False):
-        ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(cut_past=on, split_open=on))
+        params = ExplorerParams(cut_past=on, past_candidates=on, split_open=on)
+        ex = Explorer(NOMAD200_LIMITS, params=params)
         walk(graph, ex, start, max_arrivals=500, noise=0.03, seed=seed, passed=passed)
         runs[on] = ex
         assert false_merges(ex) == 0

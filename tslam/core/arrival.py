@@ -422,7 +422,7 @@ class Arrival(ExplorerState):
         crowd = self._crowd(node, fresh)
         for c, k in fresh:
             self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd))
-        slips = self._past_candidates(f, node, a, edge, length) if self.p.cut_past else []
+        slips = self._past_candidates(f, node, a, edge, length) if self.p.past_candidates else []
         slips = [(c, k, e) for c, k, e in slips if (c, k) not in implied]
         for c, k, e in slips:
             self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd, cuts={e}))
