@@ -15,17 +15,10 @@ from tslam.core.explorer import ExplorerParams
 from tslam.core.tracer import TracerParams
 
 
-def before_stop45(params: TracerParams) -> TracerParams:
-    """``params`` as up to stop 44: the sweep joins two runs as one bent wall whatever the
-    readings between them say of their vertex."""
-    return replace(params, sweep_vertex=False)
-
-
 def before_stop44(params: TracerParams) -> TracerParams:
     """``params`` as up to stop 43: homing onto a sweep's estimate by the ring whatever it
-    hears, and the arrival on a short edge from the trace law's tangent; and as
-    ``before_stop45``."""
-    return replace(before_stop45(params), home_unheard_m=0.0, approach_short_m=0.0)
+    hears, and the arrival on a short edge from the trace law's tangent."""
+    return replace(params, home_unheard_m=0.0, approach_short_m=0.0)
 
 
 def before_stop42(params: TracerParams) -> TracerParams:

@@ -130,7 +130,6 @@ class Sweep:
         shallow: bool = False,
         vertex: bool = False,
         recess: bool = False,
-        vertex_tol_m: float = 0.05,
     ) -> list[Obstacle]:
         """The obstacles seen, in the frame of a robot heading ``heading_rad``; the options
         as for ``sweep_minima``."""
@@ -145,7 +144,6 @@ class Sweep:
             shallow=shallow,
             vertex=vertex,
             recess=recess,
-            vertex_tol_m=vertex_tol_m,
         )
 
 
@@ -164,7 +162,6 @@ def sweep_minima(
     shallow: bool = False,
     vertex: bool = False,
     recess: bool = False,
-    vertex_tol_m: float = 0.05,
 ) -> list[Obstacle]:
     """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
 
@@ -183,9 +180,8 @@ def sweep_minima(
     doorway. With ``shallow`` two runs up to 90 degrees apart are one wall if the readings
     between them show a shallow bend's vertex (``_shallow_bend``). With ``vertex`` two runs
     are not one bent wall if a reading between them lies beyond the vertex their two faces
-    would make (``_bend_vertex``) by more than ``vertex_tol_m`` and 3 %. With ``recess`` a
-    plateau that borders a lower run is still an obstacle if it is wide and framed by two
-    nearer obstacles (``_recessed``).
+    would make (``_bend_vertex``). With ``recess`` a plateau that borders a lower run is
+    still an obstacle if it is wide and framed by two nearer obstacles (``_recessed``).
 
     A sweep of more than ``DENSE_READINGS`` readings (a ring that fires fast) is read as the
     medians of ``DENSE_BINS`` sectors, with ``shallow`` on and ``recess`` off.
@@ -275,7 +271,7 @@ def sweep_minima(
         if set_back[k] or set_back[(k + 1) % m]:
             continue
         a, c = runs[k], runs[(k + 1) % m]
-        one = _one_wall(a, c, d, merge_rad, bend_ratio, shallow, vertex, vertex_tol_m)
+        one = _one_wall(a, c, d, merge_rad, bend_ratio, shallow, vertex)
         if one is not False:
             parent[root((k + 1) % m)] = root(k)
         if one is None and doubts is not None:
@@ -496,7 +492,6 @@ def _one_wall(
     bend_ratio: float,
     shallow: bool = False,
     vertex: bool = False,
-    vertex_tol_m: float = 0.05,
 ) -> bool | None:
     """``c`` follows ``a`` counter-clockwise; could the two be one bent wall? None: yes, but
     a view between them too narrow to count was seen (a stray echo, or a narrow doorway)."""
@@ -511,7 +506,7 @@ def _one_wall(
         return _shallow_bend(d, k, end, max(a[0], c[0]))
     limit = bend_ratio * max(a[0], c[0])
     if vertex:
-        limit = min(limit, _bend_vertex(a[0], c[0], sep, vertex_tol_m))
+        limit = min(limit, _bend_vertex(a[0], c[0], sep))
     # A view past the bend is some degrees wide; one stray reading is not (an outlier, and a
     # ring that fires fast sweeps hundreds of readings, outliers among them). Each reading
     # stands for the sweep's mean spacing: two deeper readings separate on a slow ring.

@@ -148,21 +148,10 @@ class TracerParams:
     # 32, with half the wrong edges and no false merge (README, stop 37).
     sweep_join_pieces: bool = True
     sweep_shallow_bend: bool = True
-    # ``vertex`` (on since stop 45): two runs of a sweep are one bent wall only if no reading
-    # between them lies beyond the vertex their faces would make (sweep.py); at fig16's
-    # indent a corner and the wall behind it were joined so, and the corridor's meet point
-    # rejected. At fig13's 0.29 m pair the west point's sweep joined the cabinet's corner
-    # 1.72 m off to the wall it stands against 1.55 m off (50 degrees apart, the readings
-    # between 2.08-2.15 m, within 1.25 times the corner's distance): the place was read
-    # with three edges, not four, from there, and mapped with the east point's dead end
-    # left out, or mapped twice. The vertex of such faces is 1.81 m off.
-    sweep_vertex: bool = True
-    # ... by more than this (and 3 %): a face's plateau is cut short at a bend, so its middle
-    # reads a few degrees off its normal and the vertex of the faces so read is off too. Over
-    # fig1, 12, 13, 14 and 16, seeds 1-12 at drift paper, 3000 s: 36 runs of 60 complete
-    # with 0.15 m, against 35 with the switch off; issue 3's 60 traces meet all five
-    # targets in 41, against 40 (README, stop 45).
-    sweep_vertex_tol_m: float = 0.15
+    # The switch ``vertex``: two runs of a sweep are one bent wall only if no reading between
+    # them lies beyond the vertex their faces would make (sweep.py); at fig16's indent a
+    # corner and the wall behind it were joined so, and the corridor's meet point rejected.
+    sweep_vertex: bool = False
     # ``recess`` (on since stop 36): a wall set back between two nearer obstacles is one of
     # its own (sweep.py), and a place's meet points are sought as three corners' too
     # (place.py). At fig16's indent the corridor's meet point then finds the weak meet point
@@ -772,7 +761,6 @@ class Tracer:
             shallow=p.sweep_shallow_bend,
             vertex=p.sweep_vertex,
             recess=p.sweep_recess,
-            vertex_tol_m=p.sweep_vertex_tol_m,
         )
         if doubts and p.sweep_again and not s.swept_again:
             # One deeper reading between two walls: a stray echo, or a doorway too narrow
