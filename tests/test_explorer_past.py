@@ -20,6 +20,7 @@ from tests.graph_walk import from_ground_truth, passed_once, walk
 from tests.test_explorer_graph import false_merges
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
+from tslam.core.topomap import TopoMap
 from tslam.core.tracer import BoundaryReached, MeetPointReached
 
 TAU = 2 * math.pi
@@ -76,6 +77,21 @@ def test_a_prediction_shorter_than_its_edge_keeps_the_hypothesis_and_cuts_the_ed
     (e,) = [e for e in ex.map.edges() if {e.u, e.v} == {a, node}]
     assert e.length_m == 2.0 and ex.map.node(a).ports[0] == e.id
     assert "went past a junction: removed" in ex.notes[-2].text
+
+
+def test_an_edge_of_a_stored_map_is_not_cut():
+    # The same, the map A - B stored by an earlier run the robot restarted from: its edges
+    # were settled there, and a restart may have nothing else to place itself by (fig12
+    # seed 4 killed after its first edge cut it, and never placed itself on the two nodes).
+    tmap = TopoMap()
+    a, b = (tmap.add_meet(c, [math.radians(d) for d in deps], (x, 0.0))
+            for c, deps, x in ((1.0, A_DEPS, 0.0), (1.6, B_DEPS, 4.0)))  # fmt: skip
+    tmap.connect(a, 0, b, 1, 4.0)
+    tmap.connect(b, 0, tmap.add_boundary(0.4, (5.0, 1.0)), 0, 1.2)
+    ex = Explorer(NOMAD200_LIMITS, params=PAST, tmap=tmap)
+    _, h = _x_is_a_again(ex, a)
+    ex._arrive(meet(22.0, 0.0, M_DEPS, 180, 2.0, 1.3))
+    assert h not in ex.hyps.live and not h.cuts
 
 
 def test_without_the_repair_that_hypothesis_is_refuted():
