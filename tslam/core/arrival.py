@@ -468,8 +468,8 @@ class Arrival(ExplorerState):
             # A stored map's edge was settled in an earlier run, and a restart may have
             # little else to place itself by: fig12 seed 4, killed after its first edge
             # (10.1 m) and restarted, cut that edge and never placed itself on the two
-            # stored nodes (restarts of seeds 1-6 killed after 1, 2, 3 and 5 edges: 19 of
-            # 24 completed against 23 without cutting).
+            # stored nodes (with ``cut_past`` on, fig12 seeds 1-6 killed after 1, 2, 3 and 5
+            # edges: 19 restarts of 24 completed, 23 without cutting stored edges).
             return None
         if len(h.cuts) >= MAX_CUTS and pred.edge not in h.cuts:
             return None

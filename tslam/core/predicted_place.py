@@ -1,15 +1,17 @@
 """A new node read with one edge more or fewer than the old place a hypothesis predicts there.
 
 Two meet points closer than the robot is wide are one junction read with three edges on one
-visit and four on the next (fig13's 0.29 m pair, fig14's lab door: the sweep joins a cabinet's
-corner to the wall it stands against from one point and not from the other). A hypothesis
-tests a new node port to port, so such a reading refuted the true hypothesis, and the place
-went into the map twice: the first lasting copy in eight of fig13's twelve runs at drift
-paper, and in four of fig14's. Where every hypothesis that predicts this arrival predicts the
-same old node, and the reading is that node's with one edge more or fewer (the test an edge's
-known end passes, ``_read_otherwise``), the new node is read as that place: its ports those
-of the old node, turned as the reading is. The hypothesis then tests it as any other node.
-If no hypothesis places the node any more, it gets its own reading back.
+visit and four on the next (fig13's 0.29 m pair: from its west point the sweep joins a
+cabinet's corner to the wall the cabinet stands against, from its east point it does not). A
+hypothesis tests a new node port to port, so such a reading refuted the true hypothesis, and
+the lab went into the map again (fig13 seeds 4 and 6 at drift paper: the pair mapped with four
+edges, read with three; seed 9: mapped with three, read with four). Where every hypothesis
+that predicts this arrival predicts the same old node, and the reading is that node's with one
+edge more or fewer (the test an edge's known end passes, ``_read_otherwise``), the new node is
+read as that place: its ports those of the old node, turned as the reading is. The hypothesis
+then tests it as any other node, but that reading is no evidence for it. If no hypothesis
+places the node any more, it gets its own reading back; merged into the place, the edge its
+reading had more becomes the place's.
 """
 
 from __future__ import annotations
@@ -97,7 +99,7 @@ class PredictedPlace(ExplorerState):
         return AsPlace(placed, PortMap(tuple(pm.index[p] for p in order), arrival), c, q)
 
     def _placed_as_predicted(self, node: int, ev: MeetPointReached, pm: PortMap) -> None:
-        """Remember the reading of ``node``, added as read by ``_as_predicted``."""
+        """Remember the robot's own reading of ``node``, added as ``_as_predicted`` read it."""
         self.own_reading[node] = OwnReading(
             ev.departures_rad, ev.clearance_m, pm.index, self.born.get(node)
         )
