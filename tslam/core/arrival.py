@@ -181,11 +181,7 @@ class Arrival(ExplorerState):
         """Node ``node`` read again as its place: its ports become ``ev``'s departures, port
         ``p`` moving to departure ``carry[p]``; None while a hypothesis places the node (its
         rotation would not survive the new ports)."""
-        placed = any(
-            node in h.mapping or any(c == node for c, _ in h.mapping.values())
-            for h in self.hyps.live
-        )
-        if placed:
+        if self._in_hypotheses(node):
             return None
         self._reread_node(node, ev.departures_rad, ev.clearance_m, carry)
         if self._odo is not None:
@@ -392,8 +388,8 @@ class Arrival(ExplorerState):
             self.edge_gap[edge] = math.hypot(ev.x_m - lv[3], ev.y_m - lv[4])
         for h, w, k in confirmed:
             h.mapping[node] = (w, k)
-            # A reading taken as the predicted place is not evidence for the prediction.
-            h.confirmed += placed is None
+            if placed is None:  # a reading taken as the place predicted is no evidence
+                h.confirmed += 1
         for h, went in past:
             if went is None:  # the old edge went past this junction
                 pred = predict(self.map, h, f, j)

@@ -148,9 +148,7 @@ class PredictedPlace(ExplorerState):
             carry = {(p + shift) % d: i for p, i in enumerate(own.index)}
             if len(set(carry.values())) < d:
                 continue
-            if any(
-                r in h.mapping or any(c == r for c, _ in h.mapping.values()) for h in self.hyps.live
-            ):
+            if self._in_hypotheses(r):
                 continue
             self._reread_node(r, own.departures_rad, self.map.node(r).clearance_m, carry)
             if own.born_m is not None:
