@@ -198,8 +198,8 @@ class ExplorerParams:
     # against 34 and leaves 678 duplicate nodes against 1053 (fig13 seed 10, back at the
     # 0.29 m pair, went east through meet point 9 unhomed to meet point 8, 7.8 m for the
     # 3.5 m predicted, and the true hypothesis died), but 42 runs cover every place and edge
-    # against 46, and `tslam bench explore --drifts paper --seeds 1,...,6` 25 of 36 against
-    # 30: the edge it cuts may be the only one to a dead end (README, stop 45).
+    # against 45, and `tslam bench explore --drifts paper --seeds 1,...,6` 25 of 36 against
+    # 30 (README, stop 45).
     cut_past: bool = False
     # ... and a new node may be an old one whose departure the robot came by is explored by
     # such an edge (``_past_candidates``). Off: a restart against a stored map of fig12 (the
