@@ -379,6 +379,13 @@ class Arrival(ExplorerState):
                 if went is not None:
                     survivors.append(h)
                     past.append((h, went.beyond))
+        alike = placed is None and not confirmed
+        if alike:
+            placed = self._as_look_alike(ev)
+            if placed is not None:
+                ev = placed.ev
+                a = placed.read.arrival
+                assert a is not None
         node = self._add_meet(ev)
         if placed is not None:
             self._placed_as_predicted(node, own, placed.read)
@@ -415,6 +422,8 @@ class Arrival(ExplorerState):
         # hypothesis says the same and more, and has the evidence.
         implied = {h.mapping[node] for h in self.hyps.live if node in h.mapping}
         fresh = [ck for ck in fresh if ck not in implied]
+        if alike and placed is not None:
+            fresh = [ck for ck in fresh if ck[0] == placed.node]
         crowd = self._crowd(node, fresh)
         for c, k in fresh:
             self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd))
@@ -438,9 +447,10 @@ class Arrival(ExplorerState):
             )
         self.partial_m = 0.0
         if placed is not None:
+            why = "looks like" if alike else "is predicted to be"
             self._note(
-                f"node {node}, read with {own.degree} edges, read as the place predicted for it"
-                f" with {ev.degree}"
+                f"node {node}, read with {own.degree} edges, read as node {placed.node}, which"
+                f" it {why}, with {ev.degree}"
             )
             return node, placed.read
         return node, 0
