@@ -83,8 +83,8 @@ class PredictedPlace(ExplorerState):
         (``_read_otherwise``): each of the old node's ports on a departure of its own, every
         one agreeing with the reading turned as its arrival edge is, that turn within dead
         reckoning's heading drift since the old node was read. Not a reading with an edge
-        fewer: with both, 27 of stop 45's 60 runs (README) complete against 34, fig1 seeds 11
-        and 12 and four fig16 runs no longer."""
+        fewer: a looser rule that took those too completed 27 of stop 45's 60 runs (README)
+        against 34, fig1 seeds 11 and 12 and four fig16 runs no longer."""
         a = ev.arrival_index
         if not self.p.look_alike_place or a is None:
             return None
