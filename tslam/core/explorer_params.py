@@ -30,7 +30,7 @@ class ExplorerParams:
     # the one old node the hypotheses predict there, is read as that place (predicted_place.py;
     # False: as read, which refutes them). Over fig1, 12, 13, 14 and 16, seeds 1-12 at drift
     # paper, 3000 s: 34 of 60 runs complete against 32 (fig13 seeds 4 and 9), 1053 duplicate
-    # nodes against 1164 (README, stop 45).
+    # nodes against 1164 (README, stop 45; before ``look_alike_place``).
     predicted_place: bool = True
     # ... and a new node that looks like no old one as read, but like one old node with an
     # edge fewer, is read as that one, which it may be (``_as_look_alike``). Over the 60 runs
@@ -199,12 +199,12 @@ class ExplorerParams:
     # would make such an edge one with a shorter one takes it out instead of being refused.
     # The edge goes from the map when the hypothesis is merged (``Explorer._past_a_junction``,
     # ``_cut_conflicts``; a stored map's edges are not cut). Off: over fig1, 12, 13, 14 and
-    # 16, seeds 1-12 at drift paper, 3000 s, on stop 45's code it completes 35 runs of 60
-    # against 34 and leaves 678 duplicate nodes against 1053 (fig13 seed 10, back at the
-    # 0.29 m pair, went east through meet point 9 unhomed to meet point 8, 7.8 m for the
-    # 3.5 m predicted, and the true hypothesis died), but 42 runs cover every place and edge
-    # against 45, and `tslam bench explore --drifts paper --seeds 1,...,6` 25 of 36 against
-    # 30 (README, stop 45).
+    # 16, seeds 1-12 at drift paper, 3000 s, on stop 45's code before ``look_alike_place``
+    # it completes 35 runs of 60 against 34 and leaves 678 duplicate nodes against 1053
+    # (fig13 seed 10, back at the 0.29 m pair, went east through meet point 9 unhomed to meet
+    # point 8, 7.8 m for the 3.5 m predicted, and the true hypothesis died), but 42 runs
+    # cover every place and edge against 45, and `tslam bench explore --drifts paper --seeds
+    # 1,...,6` 25 of 36 against 30 (README, stop 45).
     cut_past: bool = False
     # ... and a new node may be an old one whose departure the robot came by is explored by
     # such an edge (``_past_candidates``). Off: a restart against a stored map of fig12 (the
