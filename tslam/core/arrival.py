@@ -388,7 +388,7 @@ class Arrival(ExplorerState):
                 assert a is not None
         node = self._add_meet(ev)
         if placed is not None:
-            self._placed_as_predicted(node, own, placed.read)
+            self._keep_own_reading(node, own, placed.read)
         edge = self.map.connect(f, j, node, a, 0.0 if length is None else length)
         lv = self._last_visit
         if lv is not None and lv[0] == f:

@@ -238,13 +238,10 @@ class ExplorerState:
         when last read apart, turned as the ports read apart both times have turned since.
         None if no port shares a departure, or the node was never read with all apart."""
         old = self.port_bearings.get(node)
-        alone = [p for p, i in enumerate(pm.index) if pm.index.count(i) == 1]
+        alone = alone_ports(pm.index)
         if old is None or len(old) != len(pm.index) or len(alone) in (0, len(pm.index)):
             return None
-        turn = math.atan2(
-            sum(math.sin(deps[pm.index[p]] - old[p]) for p in alone),
-            sum(math.cos(deps[pm.index[p]] - old[p]) for p in alone),
-        )
+        turn = reading_turn(deps, pm.index, old, alone)
         return [deps[i] if p in alone else (old[p] + turn) % TAU for p, i in enumerate(pm.index)]
 
     def _add_meet(self, ev: MeetPointReached) -> int:
@@ -299,6 +296,22 @@ class ExplorerState:
 
     def _note(self, text: str) -> None:
         self.notes.append(Note(self._now, text))
+
+
+def alone_ports(index: Sequence[int]) -> list[int]:
+    """The ports of a port map (``PortMap.index``) on a departure of their own."""
+    return [p for p, i in enumerate(index) if index.count(i) == 1]
+
+
+def reading_turn(
+    deps: Sequence[float], index: Sequence[int], ports_rad: Sequence[float], alone: list[int]
+) -> float:
+    """How far a reading's departures ``deps`` are turned from ports read at ``ports_rad``,
+    port ``p`` being departure ``index[p]``: the mean over the ports in ``alone``."""
+    return math.atan2(
+        sum(math.sin(deps[index[p]] - ports_rad[p]) for p in alone),
+        sum(math.cos(deps[index[p]] - ports_rad[p]) for p in alone),
+    )
 
 
 def nearest(bearing: float, deps: Sequence[float]) -> int:

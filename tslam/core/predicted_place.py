@@ -11,19 +11,23 @@ edge more or fewer (the test an edge's known end passes, ``_read_otherwise``), t
 read as that place: its ports those of the old node, turned as the reading is. The hypothesis
 then tests it as any other node, but that reading is no evidence for it. A new node that looks
 like no old node as read, but like one with an edge fewer, is read as that one too, and is a
-hypothesis of its own (``_as_look_alike``). If no hypothesis
-places the node any more, it gets its own reading back; merged into the place, the edge its
-reading had more becomes the place's.
+hypothesis of its own (``_as_look_alike``). If no hypothesis places the node any more, it gets
+its own reading back; merged into the place, the edge its reading had more becomes the place's.
 """
 
 from __future__ import annotations
 
-import math
-from collections import Counter
 from dataclasses import replace
 from typing import NamedTuple
 
-from tslam.core.explorer_state import TAU, ExplorerState, OwnReading, angdiff
+from tslam.core.explorer_state import (
+    TAU,
+    ExplorerState,
+    OwnReading,
+    alone_ports,
+    angdiff,
+    reading_turn,
+)
 from tslam.core.localize import arrival_matches, predict
 from tslam.core.portmap import PortMap, match_by_angle
 from tslam.core.signature import Signature
@@ -122,15 +126,10 @@ class PredictedPlace(ExplorerState):
         """``ev`` read as node ``c`` arrived at by port ``q``, ``pm`` matching them."""
         old = self.map.node(c)
         d = old.degree
-        raw = ev.departures_rad
-        uses = Counter(pm.index)
-        alone = [p for p in range(d) if uses[pm.index[p]] == 1]
+        alone = alone_ports(pm.index)
         if not alone:
             return None
-        turn = math.atan2(
-            sum(math.sin(raw[pm.index[p]] - old.departures_rad[p]) for p in alone),
-            sum(math.cos(raw[pm.index[p]] - old.departures_rad[p]) for p in alone),
-        )
+        turn = reading_turn(ev.departures_rad, pm.index, old.departures_rad, alone)
         # The old node's ports, turned as the reading is: a junction read with an edge fewer
         # sees two of them as one departure between them, and with an edge more sees one
         # from elsewhere in the place, so its own bearings may be off the place's.
@@ -149,8 +148,8 @@ class PredictedPlace(ExplorerState):
         )
         return AsPlace(placed, PortMap(tuple(pm.index[p] for p in order), arrival), c, q)
 
-    def _placed_as_predicted(self, node: int, ev: MeetPointReached, pm: PortMap) -> None:
-        """Remember the robot's own reading of ``node``, added as ``_as_predicted`` read it."""
+    def _keep_own_reading(self, node: int, ev: MeetPointReached, pm: PortMap) -> None:
+        """Remember the robot's own reading of ``node``, added as ``_read_as`` read it."""
         self.own_reading[node] = OwnReading(
             ev.departures_rad, ev.clearance_m, pm.index, self.born.get(node)
         )
