@@ -183,7 +183,11 @@ class Arrival(ExplorerState):
         rotation would not survive the new ports)."""
         if self._in_hypotheses(node):
             return None
-        self._reread_node(node, ev.departures_rad, ev.clearance_m, carry)
+        # Between the clearances of the place's two points, whichever this is: the robot
+        # comes back to either (fig16 seed 24: the place read at the weak meet point, 0.90 m,
+        # took the corridor's 1.14 m for another place, and the corridor was mapped again).
+        clearance = 0.5 * (self.map.node(node).clearance_m + ev.clearance_m)
+        self._reread_node(node, ev.departures_rad, clearance, carry)
         if self._odo is not None:
             self.born[node] = self._odo.distance_m
         self._note(f"node {node} read again as its place, with {ev.degree} edges")

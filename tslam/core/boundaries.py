@@ -72,7 +72,8 @@ class Boundaries(ExplorerState):
         from where it had been 16 s before, the way out halfway between two departures."""
         if self.map.node(f).kind != "meet":
             return False
-        along, tol, p = self._clearly_out_by(f, j), self._tol(), self.p
+        # A place's dead ends were reached from either of its points.
+        along, tol, p = self._clearly_out_by(f, j), self._tol(self.span.get(f, 0.0)), self.p
         for k, e in enumerate(self.map.node(f).ports):
             if k == j or e is None:
                 continue

@@ -52,6 +52,7 @@ from tslam.core.arrival import Arrival
 from tslam.core.boundaries import Boundaries
 from tslam.core.explorer_params import ExplorerParams
 from tslam.core.heading_bounds import HeadingBounds
+from tslam.core.place_pair import PlacePair
 from tslam.core.portmap import PortMap
 from tslam.core.predicted_place import PredictedPlace
 from tslam.core.resolving import Resolving
@@ -71,7 +72,7 @@ class Mode(enum.Enum):
     DONE = "done"
 
 
-class Explorer(Arrival, PredictedPlace, Unhomed, Boundaries, Resolving, HeadingBounds):
+class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolving, HeadingBounds):
     """``step`` once per control cycle, like the tracer; read ``map``, ``mode``, ``notes``."""
 
     @property
@@ -237,6 +238,9 @@ class Explorer(Arrival, PredictedPlace, Unhomed, Boundaries, Resolving, HeadingB
             return through  # a weak meet point: carry on along the edge
         self._fix(node)  # the merge this arrival may make weighs where the robot stands too
         node, pm = self._stand(ev, node, pm, self._resolve(node))
+        contracted = self._contract_pair(ev, node, pm)
+        if contracted is not None:
+            node, pm = contracted
         port = self._next_port(node, pm.arrival)
         if port is None and self.p.place_orphans:
             renamed = self._place_orphans(node)
