@@ -337,6 +337,26 @@ def test_a_bend_whose_faces_read_61_degrees_apart_is_one_wall():
     assert len(sweep_minima(b, d, shallow=True)) == 2
 
 
+def test_one_stray_reading_between_a_shallow_bends_faces_is_a_doubt_not_a_view():
+    """fig12's cut corner swept from 1.4 m (trace seed 11 with a ring that kept a doorway's
+    jambs apart): among the readings between the faces, 61 degrees apart, one echo read 3.25 m
+    (another transducer's, or an outlier). The faces are still one wall, the sweep doubtful
+    (the tracer turns the turret again); two such readings are a view past the bend."""
+    b = _ring(5.6)
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 175) & (deg <= 217)] = 1.46
+    d[(deg > 217) & (deg < 230)] = 1.58
+    d[(deg >= 230) & (deg <= 282)] = 1.44
+    stray = int(np.flatnonzero((deg > 217) & (deg < 230))[0])
+    d[stray] = 3.25
+    doubts: list[float] = []
+    assert len(sweep_minima(b, d, shallow=True, doubts=doubts)) == 1
+    assert len(doubts) == 1 and 215.0 < math.degrees(doubts[0]) < 235.0
+    d[(deg > 217) & (deg < 230)] = 3.25  # a view some degrees wide: a doorway, say
+    assert len(sweep_minima(b, d, shallow=True)) == 2
+
+
 def test_a_wall_cut_into_pieces_by_dropouts_is_one_obstacle_when_joined():
     """fig13's meet point 5, swept 2 cm off it: one wall answered at 72, 77 and 83 degrees
     with no echo at 80, so its pieces held two readings and one, too short to count; with

@@ -470,18 +470,22 @@ def _bend_vertex(
     return r + tol_m + tol_rel * r
 
 
-def _shallow_bend(d: np.ndarray, k: int, end: int, far: float) -> bool:
+def _shallow_bend(d: np.ndarray, k: int, end: int, far: float) -> bool | None:
     """Whether the readings from ``k`` up to ``end`` show the vertex of a shallow concave
     bend between two faces at most ``far`` away: echoes all the way, none deeper than a bend
     of some 55 degrees would give. Each face answers only on its own side of the bend, so
     the middles of their plateaus lie wider apart than their normals: fig12's 45-degree cut
     corner read 62 and 71 degrees apart once dropouts no longer cut one face out (``silent``).
     A square corner's vertex is 1.41 times as far as its walls, and between two obstacles
-    of a meet point the view goes past them."""
+    of a meet point the view goes past them. One deeper reading among them is a stray echo
+    or a view too narrow to count, as for a bend within ``merge_rad`` (None: doubtful)."""
     n = len(d)
     between = d[[(k + j) % n for j in range((end - k) % n)]]
     seen = between[np.isfinite(between)]
-    return len(seen) >= MIN_VIEW_READINGS and bool(np.all(seen <= SHALLOW_BEND_RATIO * far))
+    deep = int(np.count_nonzero(seen > SHALLOW_BEND_RATIO * far))
+    if len(seen) - deep < MIN_VIEW_READINGS or deep >= MIN_VIEW_READINGS:
+        return False
+    return True if deep == 0 else None
 
 
 def _one_wall(
