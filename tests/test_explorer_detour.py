@@ -108,6 +108,20 @@ def test_a_rival_turned_further_than_drift_allows_does_not_keep_a_proven_one_wai
     assert not ex.map.has_node(x) and ex.map.has_node(b)
 
 
+def test_a_rival_with_as_much_support_turned_just_past_the_bound_still_competes():
+    # fig15 at drift severe, seed 2: the true placement, turned 60 degrees where 60 were
+    # allowed, was set aside for its heading, and a look-alike a block over with the same
+    # support merged nine places falsely. Turned 35 degrees where 29 are allowed, a rival
+    # with as many confirmations keeps the other waiting; with fewer it does not.
+    ex, a, b, x = _two_look_alikes(35.0)
+    assert ex._heading_misfits(ex.hyps.live[1]) == [x]
+    assert ex._resolve(x) == {}
+    assert all(ex.map.has_node(n) for n in (a, b, x))
+    ex, a, b, x = _two_look_alikes(35.0, confirmed=4)
+    ex.hyps.live[1].confirmed = 3
+    assert ex._resolve(x).get(x, (None, 0))[0] == a
+
+
 def test_a_rival_set_aside_for_its_heading_asks_one_confirmation_more():
     # fig15 without drift, seed 2: with the turned rival set aside, the one left had the
     # two confirmations that prove a single hypothesis, and merged a column of crossings

@@ -71,6 +71,22 @@ class HeadingBounds(ExplorerState):
         misfits = [x for x, (c, k) in sorted(h.mapping.items()) if not self._heading_fits(x, c, k)]
         return misfits or self._turned_apart(h)
 
+    def _turned_well_beyond(self, h: Hypothesis) -> bool:
+        """Whether some node ``h`` maps is turned from its old node further than dead
+        reckoning drifts by ``heading_base_rad`` more: a mirror image, not drift past its
+        bound (fig12 seed 5's rival, 60 degrees where 29 were allowed)."""
+        for x, (c, k) in sorted(h.mapping.items()):
+            bx = self.born.get(x)
+            if bx is None or not self.map.has_node(x) or self.map.node(x).kind != "meet":
+                continue
+            turn = self._turn(self.map.node(x).departures_rad, c, k)
+            if turn is None:
+                continue
+            bound = self._heading_drift(abs(bx - turn[1])) + self.p.heading_base_rad
+            if abs(turn[0]) > bound:
+                return True
+        return False
+
     def _turned_apart(self, h: Hypothesis) -> list[int]:
         """The first two meet points ``h`` maps whose turns from their old nodes differ by
         more than ``heading_pair_rad`` and the drift between their readings; else none."""

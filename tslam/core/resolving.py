@@ -54,9 +54,21 @@ class Resolving(ExplorerState):
             # and both wrong (fig15 without drift, seed 2: a column of crossings merged
             # onto the one beside it, 3.5 m away). It needs one confirmation more.
             plausible = [h for h in tested if not self._heading_misfits(h)]
+            # But a rival with as much support is set aside only if it is turned well beyond
+            # the bound: under severe drift the heading drifts to the bound and past it. At
+            # fig15 (severe, seed 2) a placement true but for its newest node, turned 60
+            # degrees where 60 were allowed, was set aside, and one a block over, with the
+            # same six confirmations, merged nine places falsely.
+            best = max((h.confirmed for h in plausible), default=0)
+            kept = [
+                h
+                for h in tested
+                if any(h is q for q in plausible)
+                or (h.confirmed >= best and not self._turned_well_beyond(h))
+            ]
             if plausible and len(plausible) < len(tested):
                 evidence += 1
-            tested = plausible or tested
+            tested = kept if plausible else tested
         aside: list[Hypothesis] = []
         held_up = False
         if self.p.close_fragment:
