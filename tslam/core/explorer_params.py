@@ -37,8 +37,9 @@ class ExplorerParams:
     # above: 998 duplicate nodes against 1053, 46 covering every place and edge against 45,
     # 34 complete as without.
     look_alike_place: bool = True
-    # Two meet nodes joined by an edge no longer than this, each read as the same place
-    # (equal degree, every port's bearing agreeing), become one node (place_pair.py; 0: off).
+    # Two meet nodes joined by an edge no longer than this, read as one place (every port
+    # of one agreeing in bearing with a port of the other, but for the one to it on a node
+    # read with an edge fewer), become one node (place_pair.py; 0: off).
     pair_contract_m: float = 0.45
     # The tracer may leave its edge for a moment (a silent patch, a bump) and re-access it.
     # Back on an edge within this (dead-reckoned, so short-range) distance, it is the same one.

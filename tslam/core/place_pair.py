@@ -9,10 +9,12 @@ end's meet point and both its dead ends). No hypothesis tests this: both nodes a
 the edge between them was traced, not predicted.
 
 So where the robot stands on a meet node joined by an edge no longer than
-``ExplorerParams.pair_contract_m`` to another meet node of the same degree, and each port of
-the one agrees in absolute bearing with a port of the other (the robot read both from a few
-decimetres apart, so dead reckoning's heading has not turned between them), the edge between
-them goes and the two become one node: the place, its ports the union of theirs. Whatever
+``ExplorerParams.pair_contract_m`` to another meet node, and each port of the one with fewer
+edges (or of either) agrees in absolute bearing with a port of its own of the other, but for
+the one to it on a node read with an edge fewer (fig16 seed 9: the weak meet point read
+alone, the place read at the corridor's point), the edge between them goes and the two become
+one node: the place, its ports the union of theirs. The robot read both from a few
+decimetres apart, so dead reckoning's heading has not turned between them. Whatever
 the topology then forces (the same corridor mapped from both) merges too, each pair tested
 as every merge is (``TopoMap.merge`` with the likeness a prediction must show), or nothing
 changes. Not while a hypothesis is open: its mapping names the nodes.
