@@ -313,17 +313,25 @@ def test_one_reading_off_a_plateau_does_not_cut_the_wall_out():
     assert sweep_minima(b, d2, bridge=True) == []
 
 
-def test_a_bend_whose_faces_read_61_degrees_apart_is_one_wall():
-    """fig12's cut corner (a 45-degree bend) read 61 degrees apart from a meet point's
-    sweep, each face's plateau cut short at the bend; the faces are one wall (the readings
-    between show a shallow bend's vertex, or within the wider join of the tracer's
-    centred_meet), and a room's corner still two walls."""
+def _cut_corner() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A sweep of fig12's cut corner from a meet point: two faces 61 degrees apart, 1.46 m and
+    1.44 m off, and the bend's vertex between them a little farther. Bearings (radians and
+    degrees) and distances."""
     b = _ring(5.6)
     deg = np.degrees(b)
     d = np.full(len(b), np.inf)
     d[(deg >= 175) & (deg <= 217)] = 1.46
     d[(deg > 217) & (deg < 230)] = 1.58  # the bend's vertex, a little farther
     d[(deg >= 230) & (deg <= 282)] = 1.44
+    return b, deg, d
+
+
+def test_a_bend_whose_faces_read_61_degrees_apart_is_one_wall():
+    """fig12's cut corner (a 45-degree bend) read 61 degrees apart from a meet point's
+    sweep, each face's plateau cut short at the bend; the faces are one wall (the readings
+    between show a shallow bend's vertex, or within the wider join of the tracer's
+    centred_meet), and a room's corner still two walls."""
+    b, deg, d = _cut_corner()
     assert len(sweep_minima(b, d)) == 2
     assert len(sweep_minima(b, d, shallow=True)) == 1
     assert len(sweep_minima(b, d, WIDE_BEND_MERGE_RAD)) == 1
@@ -342,12 +350,7 @@ def test_one_stray_reading_between_a_shallow_bends_faces_is_a_doubt_not_a_view()
     jambs apart): among the readings between the faces, 61 degrees apart, one echo read 3.25 m
     (another transducer's, or an outlier). The faces are still one wall, the sweep doubtful
     (the tracer turns the turret again); two such readings are a view past the bend."""
-    b = _ring(5.6)
-    deg = np.degrees(b)
-    d = np.full(len(b), np.inf)
-    d[(deg >= 175) & (deg <= 217)] = 1.46
-    d[(deg > 217) & (deg < 230)] = 1.58
-    d[(deg >= 230) & (deg <= 282)] = 1.44
+    b, deg, d = _cut_corner()
     stray = int(np.flatnonzero((deg > 217) & (deg < 230))[0])
     d[stray] = 3.25
     doubts: list[float] = []
