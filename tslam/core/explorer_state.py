@@ -21,8 +21,9 @@ from tslam.core.localize import Hypotheses, Tolerances
 from tslam.core.portmap import PortMap
 from tslam.core.signature import Signature
 from tslam.core.stands import Stands
-from tslam.core.topomap import Likeness, Step, TopoMap
+from tslam.core.topomap import Likeness, MergePlan, Step, TopoMap
 from tslam.core.tracer import BoundaryReached, MeetPointReached, Tracer, TracerParams
+from tslam.core.zipmerge import Renames, merge_mapping
 
 TAU = 2.0 * math.pi
 # Edges a hypothesis may say went past a junction (``Explorer._past_a_junction``).
@@ -265,6 +266,22 @@ class ExplorerState:
         """What every pair a merge makes one must agree on: what a prediction is tested on."""
         t = self._tol()
         return Likeness(t.clearance_m, t.angle_rad, t.length_abs_m, t.length_rel)
+
+    def _merge_recorded(
+        self, mapping: dict[int, tuple[int, int]], alike: Likeness
+    ) -> tuple[Renames, MergeRecord]:
+        """Merge ``mapping`` into the map (``merge_mapping``; ``MapError`` as it raises) and
+        record which node became which, with their truths for scoring."""
+        truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
+        pairs: list[tuple[int, int, tuple[float, float] | None, tuple[float, float] | None]] = []
+
+        def record(plan: MergePlan) -> None:
+            pairs.extend((d, r, truth[d], truth[r]) for d, (r, _) in plan.nodes.items())
+
+        renamed = merge_mapping(self.map, mapping, alike, record)
+        merged = MergeRecord(self._now, tuple(pairs))
+        self.merges.append(merged)
+        return renamed, merged
 
     def _tol(self, slack_m: float = 0.0) -> Tolerances:
         tol = self.p.tol

@@ -13,22 +13,25 @@ from tslam.core.localize import Hypothesis
 class HeadingBounds(ExplorerState):
     """Drift bounds on hypotheses."""
 
-    def _heading_fits(self, x: int, c: int, k: int) -> bool:
+    def _heading_fits(self, x: int, c: int, k: int, margin_rad: float = 0.0) -> bool:
         """Whether node ``x`` can be old node ``c`` under rotation ``k`` as far as dead
         reckoning's heading goes: their departures, each in the odometry frame of its own
-        reading, are turned no more than the drift between those readings allows."""
+        reading, are turned no more than the drift between those readings allows (and
+        ``margin_rad`` more)."""
         bx = self.born.get(x)
         if bx is None or not self.map.has_node(x) or self.map.node(x).kind != "meet":
             return True
-        return self._turn_fits(self.map.node(x).departures_rad, bx, c, k)
+        return self._turn_fits(self.map.node(x).departures_rad, bx, c, k, margin_rad)
 
-    def _turn_fits(self, deps: tuple[float, ...], read_at_m: float, c: int, k: int) -> bool:
+    def _turn_fits(
+        self, deps: tuple[float, ...], read_at_m: float, c: int, k: int, margin_rad: float = 0.0
+    ) -> bool:
         """``_heading_fits`` for departures ``deps`` read at encoder distance ``read_at_m``:
         departure i is port ``(i + k) % degree`` of old node ``c``."""
         turn = self._turn(deps, c, k)
         if turn is None:
             return True
-        return abs(turn[0]) <= self._heading_drift(abs(read_at_m - turn[1]))
+        return abs(turn[0]) <= self._heading_drift(abs(read_at_m - turn[1])) + margin_rad
 
     def _turn(self, deps: tuple[float, ...], c: int, k: int) -> tuple[float, float] | None:
         """How far departures ``deps`` are turned from old node ``c``'s under rotation ``k``,
@@ -75,17 +78,8 @@ class HeadingBounds(ExplorerState):
         """Whether some node ``h`` maps is turned from its old node further than dead
         reckoning drifts by ``heading_base_rad`` more: a mirror image, not drift past its
         bound (fig12 seed 5's rival, 60 degrees where 29 were allowed)."""
-        for x, (c, k) in sorted(h.mapping.items()):
-            bx = self.born.get(x)
-            if bx is None or not self.map.has_node(x) or self.map.node(x).kind != "meet":
-                continue
-            turn = self._turn(self.map.node(x).departures_rad, c, k)
-            if turn is None:
-                continue
-            bound = self._heading_drift(abs(bx - turn[1])) + self.p.heading_base_rad
-            if abs(turn[0]) > bound:
-                return True
-        return False
+        margin = self.p.heading_base_rad
+        return any(not self._heading_fits(x, c, k, margin) for x, (c, k) in h.mapping.items())
 
     def _turned_apart(self, h: Hypothesis) -> list[int]:
         """The first two meet points ``h`` maps whose turns from their old nodes differ by

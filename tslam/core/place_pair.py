@@ -22,12 +22,11 @@ changes. Not while a hypothesis is open: its mapping names the nodes.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import replace
 
-from tslam.core.explorer_state import ExplorerState, MergeRecord, angdiff, nearest
+from tslam.core.explorer_state import ExplorerState, angdiff, nearest
 from tslam.core.portmap import PortMap
-from tslam.core.topomap import MapError, MergePlan, TopoMap
+from tslam.core.topomap import MapError, TopoMap
 from tslam.core.tracer import MeetPointReached
 from tslam.core.zipmerge import Renames, merge_mapping
 
@@ -126,33 +125,29 @@ class PlacePair(ExplorerState):
         base = self._likeness()
         alike = replace(base, length_abs_m=base.length_abs_m + length)
 
-        def apply(tmap: TopoMap, on_plan: Callable[[MergePlan], None] | None = None) -> Renames:
+        def prepare(tmap: TopoMap) -> None:
             tmap.remove_edge(e)
             explored = {j: k for j, k in carry.items() if tmap.node(point).ports[j] is not None}
             tmap.reread(point, a.departures_rad, clearance, explored)
             tmap.reread(place, a.departures_rad, clearance, same)
-            return merge_mapping(tmap, {drop: (keep, 0)}, alike, on_plan)
 
+        mapping = {drop: (keep, 0)}
+        trial = self.map.copy()
         try:
-            apply(self.map.copy())
+            prepare(trial)
+            merge_mapping(trial, mapping, alike)
         except MapError:
             return {}
-        truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
-        pairs: list[tuple[int, int, tuple[float, float] | None, tuple[float, float] | None]] = []
-
-        def record(plan: MergePlan) -> None:
-            pairs.extend((d, r, truth[d], truth[r]) for d, (r, _) in plan.nodes.items())
-
         self.edge_gap.pop(e, None)
-        renamed = apply(self.map, record)
+        prepare(self.map)
+        renamed, merged = self._merge_recorded(mapping, alike)
         if self.p.place_span_slack:
             # Its edges were measured from one point or the other (``Arrival._spans``).
             spans = (self.span.pop(place, 0.0), self.span.pop(point, 0.0), length)
             self.span[keep] = max(spans)
-        self.merges.append(MergeRecord(self._now, tuple(pairs)))
         self._note(
             f"nodes {place} and {point}, {length:.2f} m apart, read as one place: "
-            + ", ".join(f"{d}={r}" for d, r, _, _ in pairs)
+            + ", ".join(f"{d}={r}" for d, r, _, _ in merged.pairs)
             + f"; {self._size()}"
         )
         self._apply_renames(renamed)

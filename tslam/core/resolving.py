@@ -10,11 +10,11 @@ from dataclasses import replace
 
 import networkx as nx
 
-from tslam.core.explorer_state import MAX_CUTS, ExplorerState, MergeRecord
+from tslam.core.explorer_state import MAX_CUTS, ExplorerState
 from tslam.core.localize import Hypotheses, Hypothesis, separating_port
 from tslam.core.placements import Placement, other_placements, placements
 from tslam.core.portmap import PortMap
-from tslam.core.topomap import EdgeConflictError, MapError, MergePlan, TopoMap
+from tslam.core.topomap import EdgeConflictError, MapError, TopoMap
 from tslam.core.tracer import MeetPointReached
 from tslam.core.zipmerge import implies, merge_mapping
 
@@ -444,21 +444,16 @@ class Resolving(ExplorerState):
             return {}
         if view is not self.map:
             self._remove_cuts(h)
-        pairs = []
-        truth = {n.id: n.truth for n in self.map.nodes()}  # dropped nodes vanish
-
-        def record(plan: MergePlan) -> None:
-            pairs.extend((d, r, truth[d], truth[r]) for d, (r, _) in plan.nodes.items())
-
         try:
-            renamed = merge_mapping(self.map, h.mapping, self._likeness(), record)
+            renamed, merged = self._merge_recorded(h.mapping, self._likeness())
         except MapError as exc:
             self._note(f"merge refused by the map ({exc}): keeping both")
             self._abandon_hypotheses()
             return {}
-        self.merges.append(MergeRecord(self._now, tuple(pairs)))
         self._note(
-            "loop closed: " + ", ".join(f"{d}={r}" for d, r, _, _ in pairs) + f"; {self._size()}"
+            "loop closed: "
+            + ", ".join(f"{d}={r}" for d, r, _, _ in merged.pairs)
+            + f"; {self._size()}"
         )
         self._apply_renames(renamed)
         fragment = {renamed.get(x, (x, 0))[0] for x in self.hyps.fragment}
