@@ -5,6 +5,7 @@ pick the move that separates the rest, place the fragments left unattached.
 from __future__ import annotations
 
 import copy
+import math
 from collections.abc import Sequence
 from dataclasses import replace
 
@@ -305,6 +306,13 @@ class Resolving(ExplorerState):
         if node in renamed:
             node, shift = renamed[node]
             pm = pm.renamed(shift)
+        n = self.map.node(node)
+        if len(pm.index) != n.degree == ev.degree:
+            # The merge made the place this reading (``_grow_merged``: read as its predicted
+            # place with an edge fewer, then merged there). The port map was the reading's as
+            # that place, a port short, and a robot sent out by the new port met an index out
+            # of range (fig14 seed 15, in a variant of the arbiter; latent here).
+            pm = _turned_reading(n.departures_rad, ev)
         self.here = node
         self._last_visit = (node, ev.departures_rad, pm, ev.x_m, ev.y_m)
         if len(set(pm.index)) == len(pm.index) == ev.degree:
@@ -535,3 +543,18 @@ class Resolving(ExplorerState):
             if old is not None and r not in self.port_bearings:
                 n_ports = len(old)
                 self.port_bearings[r] = tuple(old[(p - shift) % n_ports] for p in range(n_ports))
+
+
+def _turned_reading(ports_rad: Sequence[float], ev: MeetPointReached) -> PortMap:
+    """The port map of ``ev`` onto a node of its degree whose ports are a turned copy of its
+    departures: the cyclic shift under which the turn is the most uniform."""
+    d = ev.degree
+
+    def spread(k: int) -> float:
+        turns = [ports_rad[p] - ev.departures_rad[(p + k) % d] for p in range(d)]
+        return -math.hypot(sum(map(math.cos, turns)), sum(map(math.sin, turns)))
+
+    k = min(range(d), key=spread)
+    index = tuple((p + k) % d for p in range(d))
+    a = ev.arrival_index
+    return PortMap(index, None if a is None else index.index(a))
