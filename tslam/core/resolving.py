@@ -547,14 +547,11 @@ class Resolving(ExplorerState):
 
 def _turned_reading(ports_rad: Sequence[float], ev: MeetPointReached) -> PortMap:
     """The port map of ``ev`` onto a node of its degree whose ports are a turned copy of its
-    departures: the cyclic shift under which the turn is the most uniform."""
+    departures: the rotation under which the turn is the most uniform."""
     d = ev.degree
 
     def spread(k: int) -> float:
-        turns = [ports_rad[p] - ev.departures_rad[(p + k) % d] for p in range(d)]
+        turns = [ports_rad[(i + k) % d] - ev.departures_rad[i] for i in range(d)]
         return -math.hypot(sum(map(math.cos, turns)), sum(map(math.sin, turns)))
 
-    k = min(range(d), key=spread)
-    index = tuple((p + k) % d for p in range(d))
-    a = ev.arrival_index
-    return PortMap(index, None if a is None else index.index(a))
+    return PortMap.rotation(min(range(d), key=spread), d, ev.arrival_index)
