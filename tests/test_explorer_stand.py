@@ -45,3 +45,25 @@ def test_a_port_map_that_fits_the_node_is_kept():
     node = ex.map.add_meet(1.4, ev.departures_rad, (0.0, 0.0))
     pm = PortMap((1, 2, 3, 0), 0)
     assert ex._stand(ev, node, pm, {})[1] == pm
+
+
+def test_a_place_grown_past_a_reading_with_an_edge_fewer_shares_its_departures():
+    """fig14 seed 30 (switch ``vertex``): a junction read with four edges, mapped as its
+    predicted place of three; back there with three, the robot was placed on it, and the
+    loop closed, growing the place to the four-edge reading. Standing with the three-edge
+    reading's port map, sent out by the fourth port: index out of range."""
+    ev = _reading([56.0, 148.0, 264.0], arrival=1)
+    ex = Explorer(NOMAD200_LIMITS)
+    node = ex.map.add_meet(1.4, tuple(math.radians(b) for b in (65, 152, 257, 350)), (0.0, 0.0))
+    here, pm = ex._stand(ev, node, PortMap((0, 1, 2), 1), {})
+    assert here == node and len(pm.index) == 4
+    # Each port on the departure nearest it; the fourth (350 degrees) shares the one at 56,
+    # as near as the reading turned by the others' 3 degrees puts it.
+    assert pm.index == (0, 1, 2, 0)
+    assert pm.arrival == 1
+    # Sent out by the fourth port, the robot leaves by its bearing when read apart (the
+    # four-edge reading), turned as the ports read alone have turned since.
+    ex.port_bearings[node] = tuple(math.radians(b) for b in (65, 152, 257, 350))
+    along = ex._departure_bearing(ev, node, pm, 3)
+    assert along is not None
+    assert abs((math.degrees(along) - 350 + 180) % 360 - 180) < 6

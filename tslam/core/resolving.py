@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import networkx as nx
 
-from tslam.core.explorer_state import MAX_CUTS, ExplorerState
+from tslam.core.explorer_state import MAX_CUTS, ExplorerState, angdiff, nearest
 from tslam.core.localize import Hypotheses, Hypothesis, separating_port
 from tslam.core.placements import Placement, other_placements, placements
 from tslam.core.portmap import PortMap
@@ -307,11 +307,12 @@ class Resolving(ExplorerState):
             node, shift = renamed[node]
             pm = pm.renamed(shift)
         n = self.map.node(node)
-        if len(pm.index) != n.degree == ev.degree:
-            # The merge made the place this reading (``_grow_merged``: read as its predicted
-            # place with an edge fewer, then merged there). The port map was the reading's as
-            # that place, a port short, and a robot sent out by the new port met an index out
-            # of range (fig14 seed 15, in a variant of the arbiter; latent here).
+        if len(pm.index) != n.degree:
+            # The merge grew the node (``_grow_merged``): to this very reading, read as its
+            # predicted place with an edge fewer (fig14 seed 15, in a variant of the
+            # arbiter), or to a reading with an edge more taken here before (fig14 seed 30
+            # with the switch ``vertex``). The port map was the smaller place's, a port
+            # short, and a robot sent out by the new port met an index out of range.
             pm = _turned_reading(n.departures_rad, ev)
         self.here = node
         self._last_visit = (node, ev.departures_rad, pm, ev.x_m, ev.y_m)
@@ -546,12 +547,28 @@ class Resolving(ExplorerState):
 
 
 def _turned_reading(ports_rad: Sequence[float], ev: MeetPointReached) -> PortMap:
-    """The port map of ``ev`` onto a node of its degree whose ports are a turned copy of its
-    departures: the rotation under which the turn is the most uniform."""
-    d = ev.degree
+    """The port map of ``ev`` onto a node whose ports are a turned copy of its departures:
+    the rotation under which the turn is the most uniform. With another number of ports,
+    each port goes to the departure nearest it under the turn that fits them best (two
+    ports may share one: the node's place has an edge the reading did not resolve)."""
+    d, seen = ev.degree, ev.departures_rad
+    if len(ports_rad) == d:
 
-    def spread(k: int) -> float:
-        turns = [ports_rad[(i + k) % d] - ev.departures_rad[i] for i in range(d)]
-        return -math.hypot(sum(map(math.cos, turns)), sum(map(math.sin, turns)))
+        def spread(k: int) -> float:
+            turns = [ports_rad[(i + k) % d] - seen[i] for i in range(d)]
+            return -math.hypot(sum(map(math.cos, turns)), sum(map(math.sin, turns)))
 
-    return PortMap.rotation(min(range(d), key=spread), d, ev.arrival_index)
+        return PortMap.rotation(min(range(d), key=spread), d, ev.arrival_index)
+
+    def matched(turn: float) -> tuple[float, tuple[int, ...]]:
+        index = tuple(nearest(b - turn, seen) for b in ports_rad)
+        return sum(angdiff(seen[i], b - turn) for i, b in zip(index, ports_rad, strict=True)), index
+
+    turns = [b - s for b in ports_rad for s in seen]  # every port on every departure
+    turn = min(turns, key=lambda t: matched(t)[0])
+    index = matched(turn)[1]
+    a = ev.arrival_index
+    mine = [p for p, i in enumerate(index) if i == a]
+    if a is None or not mine:
+        return PortMap(index, None)
+    return PortMap(index, min(mine, key=lambda p: angdiff(ports_rad[p] - turn, seen[a])))
