@@ -199,12 +199,17 @@ class Arrival(ExplorerState):
         slack = self.p.estimate_slack_m if e in self.estimated else 0.0
         edge = self.map.edge(e)
         w, q = edge.other_end(f, j)
-        # A place read at both its points: the edge ends at one or the other.
+        # A place read at both its points: the edge ends at one or the other, ...
         slack += self.span.get(f, 0.0) + self.span.get(w, 0.0)
         tol = self._tol(slack)
         a = ev.arrival_index
         assert a is not None
-        k = self._match(ev, seen, a, w, q, length, edge.length_m, slack)
+        # ... whose clearances differ by no more than the points lie apart (the distance to
+        # the nearest obstacle changes by at most the distance moved): fig16's place, read
+        # at the corridor's point 1.14 m clear, was not recognised at the weak one 0.89 m
+        # clear with the same four edges, and the robot mapped it and the corridor again.
+        near = self.span.get(w, 0.0) if self.p.place_span_clearance else 0.0
+        k = self._match(ev, seen, a, w, q, length, edge.length_m, slack, near)
         back = k is None and self.map.node(f).kind == "boundary"
         dead_end = back and self.map.node(w).degree == ev.degree
         # None when no recent pass can say; a twin junction a few decimetres on has the same
@@ -336,6 +341,7 @@ class Arrival(ExplorerState):
         length: float | None,
         mapped: float,
         slack_m: float = 0.0,
+        clearance_slack_m: float = 0.0,
     ) -> int | None:
         """The rotation under which ``seen``, arrived at by index ``a``, is node ``w`` reached by
         its port ``q`` after an edge of ``mapped`` metres; None if it is not. Nor is it if
@@ -343,9 +349,10 @@ class Arrival(ExplorerState):
         fig12, whose junctions' departures are about evenly spread, a robot that went the
         wrong way round the triangle arrived along the other edge, after a length like the
         planned one, and was taken for arriving as planned, its map turned a third of a turn
-        (seed 8). ``slack_m``: more slack on the length (``estimated``)."""
+        (seed 8). ``slack_m``: more slack on the length (``estimated``), ``clearance_slack_m``
+        on the clearance."""
         pred = Prediction(w, q, mapped, self.map.node(w).kind)
-        k = arrival_matches(self.map, seen, a, pred, length, self._tol(slack_m))
+        k = arrival_matches(self.map, seen, a, pred, length, self._tol(slack_m, clearance_slack_m))
         if k is None or self._odo is None:
             return k
         return k if self._turn_fits(ev.departures_rad, self._odo.distance_m, w, k) else None

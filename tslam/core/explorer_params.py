@@ -92,6 +92,9 @@ class ExplorerParams:
     # A node read at two points of its place: an edge to it is matched with that much more
     # length slack, as the robot may home at either end (False: the edge's own tolerance).
     place_span_slack: bool = True
+    # ... and with that much more clearance slack on arriving at the node, the clearance at
+    # its two points differing by at most their distance (False: the signature's tolerance).
+    place_span_clearance: bool = True
     # An edge whose length is a walk's remainder is matched with this much more slack, until
     # a traversal measures it: fig12 seed 10 mapped a dead end at 1.17 m so and, back along
     # it, homed at its junction after 1.55 m, 4 cm beyond the tolerance, and went lost.

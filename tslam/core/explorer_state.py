@@ -283,10 +283,12 @@ class ExplorerState:
         self.merges.append(merged)
         return renamed, merged
 
-    def _tol(self, slack_m: float = 0.0) -> Tolerances:
+    def _tol(self, slack_m: float = 0.0, clearance_slack_m: float = 0.0) -> Tolerances:
         tol = self.p.tol
         if slack_m:
             tol = replace(tol, length_abs_m=tol.length_abs_m + slack_m)
+        if clearance_slack_m:
+            tol = replace(tol, clearance_m=tol.clearance_m + clearance_slack_m)
         if not self.disturbed:
             return tol
         return replace(tol, at_least=True, wandered_m=self.wandered_m)
