@@ -40,9 +40,10 @@ def _home_at_the_weak_point(ex: Explorer) -> int:
 
 
 def test_a_place_read_at_both_points_is_recognised_at_the_less_clear_one():
-    """fig16 seed 28, from the indent's dead end: 'lost (expected node 1 (degree 4,
+    """fig16 seed 28, back from the indent's dead end: 'lost (expected node 1 (degree 4,
     clearance 1.14 m) after edge 4 (0.86 m), found degree 4, clearance 0.89 m after
-    0.56 m)', and the robot mapped the place, the corridor and the far junction again."""
+    0.56 m)', and the robot mapped the place and the corridor beyond it again. Here from
+    the south junction, where no rule for coming back from a dead end applies."""
     ex, c = _up_from_the_south(0.37)
     assert _home_at_the_weak_point(ex) == c
     assert len(ex.map.nodes()) == 2
