@@ -76,15 +76,15 @@ def test_a_port_left_by_its_own_bearing_goes_on_straight_further():
         assert (tracer.behaviour is Behaviour.DEPART) is still_departing, until
 
 
-def _swing_run(params: TracerParams, wide: float = 2.9) -> list:
+def _swing_run(params: TracerParams, wide: float = 2.9, behind: float = 0.5) -> list:
     """Trace a room ``2 * wide`` across for a second, then lose the left wall: the right
-    wall and a wall behind pair up for 2 s, then the left wall is back. The commands of the
-    lost stretch."""
+    wall and a wall ``behind`` further pair up for 2 s, then the left wall is back. The
+    commands of the lost stretch."""
     tracer, given = _tracer(params)
     tracer.s.behaviour = Behaviour.TRACE
     tracer.s.tangent = (1.0, 0.0)
     corridor = [_at(wide, 90.0), _at(wide, -90.0)]
-    swung = [_at(wide, -90.0), _at(wide + 0.5, -150.0)]
+    swung = [_at(wide, -90.0), _at(wide + behind, -150.0)]
     out = []
     for k in range(40):
         t = 0.1 * k
@@ -106,7 +106,26 @@ def test_a_swing_of_the_tangent_is_coasted_through_in_a_wide_room():
     # After swing_coast_s the new pair is taken: the robot turns.
     assert any(abs(tw.steer_radps) > 0.05 for t, tw in coasting if t > 2.6)
     # Without coasting it turns at once; so it does between walls 1 m off, which fall silent
-    # for a cycle or two, not seconds (``swing_clearance_m``).
-    for turning in (_swing_run(TracerParams(swing_coast_s=0.0)), _swing_run(TracerParams(), 1.0)):
+    # for a cycle or two, not seconds (``swing_clearance_m``), unless the new pair's second
+    # obstacle lies further than the robot could have moved from the last (``swing_jump_m``).
+    no_jump = TracerParams(swing_jump_m=0.0)
+    for turning in (_swing_run(TracerParams(swing_coast_s=0.0)), _swing_run(no_jump, 1.0)):
         assert turning[0][1] != before and abs(turning[0][1].steer_radps) > 0.05
     assert corridor != swung
+
+
+def test_with_jump_a_swing_onto_a_wall_behind_a_lost_echo_is_coasted_at_any_clearance():
+    """fig12 seed 4, restarted (noise seed 104, switch ``vertex``): 0.3 m out of the junction
+    at (1.44, 1.44) toward its dead-end corner, the ring read the two walls 1.2 m off as one
+    obstacle for a cycle, paired it with the block's corner 1.70 m off, and the tangent swung
+    round in two steps; the robot went back through the junction and the corner's departure
+    was given up."""
+    jump = TracerParams(swing_jump_m=0.15)  # the switch ``jump``
+    coasting = _swing_run(jump, 1.0)
+    before = coasting[0][1]
+    assert before.v_mps > 0.0 and abs(before.steer_radps) < 1e-6  # straight on
+    assert all(tw == before for t, tw in coasting if t <= 2.5 + 1e-9)
+    assert any(abs(tw.steer_radps) > 0.05 for t, tw in coasting if t > 2.6)
+    # A new pair as near as the last (a junction's next edge) is taken at once.
+    turning = _swing_run(jump, 1.0, behind=0.1)
+    assert abs(turning[0][1].steer_radps) > 0.05

@@ -208,6 +208,13 @@ class TracerParams:
     # at fig-sized clearances for a cycle or two, and there coasting cost more than it
     # saved (the three benches: 44 runs of 130 complete coasting everywhere, 49 without).
     swing_clearance_m: float = 2.0
+    # The switch ``jump`` (stop 48): a swing is coasted through at any clearance where the
+    # pair's second obstacle is this much further than the last cycle's, beyond what the
+    # robot moved: that obstacle's echo was lost and a wall behind makes the pair (fig12
+    # seed 4 restarted with ``vertex``: 0.3 m out of a junction toward its dead-end corner
+    # the ring read the corner's two walls as one for a cycle, the tangent swung round with
+    # the block's corner 1.7 m off, and the corner's departure was given up). 0: off.
+    swing_jump_m: float = 0.0
     # An edge's length drops the points its chain goes out to and comes back from, at this
     # ratio of chords (edgelength.py; inf: none dropped, as up to stop 30).
     edge_spike_ratio: float = 1.5
@@ -328,6 +335,8 @@ class _State:
     until_sides_m: float = 0.0  # this departure's depart_until_sides_m
     swung_at: float | None = None  # when the trace law's tangent swung off the course
     pair_clearance: float = 0.0  # the last pair's distance (d1) as the trace law set the tangent
+    pair_far: float = 0.0  # ... and its second obstacle's (d2), and the odometer then
+    pair_at_m: float = 0.0
     traced_at: float = -math.inf  # the last cycle the trace law set the tangent
     last_paired: float = -math.inf  # when the trace last had its two obstacles within off_edge_m
     # The edge's length: its own, not the weaving path's, and homing's wander left out (a
@@ -536,7 +545,13 @@ class Tracer:
         s.traced_at = now
         if p.swing_coast_s > 0.0 and prev is not None and tracing:
             swung = t[0] * prev[0] + t[1] * prev[1] < math.cos(p.swing_rad)
-            if swung and (s.swung_at is not None or s.pair_clearance >= p.swing_clearance_m):
+            # The pair's second obstacle further than the robot could have moved from the
+            # last one: that one's echo was lost, and a wall behind it makes the pair.
+            jumped = p.swing_jump_m > 0.0 and (
+                o2.distance_m - s.pair_far > p.swing_jump_m + abs(odo.distance_m - s.pair_at_m)
+            )
+            wide = s.pair_clearance >= p.swing_clearance_m
+            if swung and (s.swung_at is not None or wide or jumped):
                 if s.swung_at is None:
                     s.swung_at = now
                 if now - s.swung_at <= p.swing_coast_s:
@@ -544,6 +559,7 @@ class Tracer:
             else:
                 s.swung_at = None
         s.pair_clearance = o1.distance_m
+        s.pair_far, s.pair_at_m = o2.distance_m, odo.distance_m
         s.tangent = _to_odom(t, odo)
         step = laws.step_onto_edge(o1, o2)
         if step is not None:
