@@ -88,6 +88,39 @@ def match_by_angle(
     )
 
 
+def turned_onto(
+    ports_rad: Sequence[float], seen_rad: Sequence[float], arrival_index: int | None
+) -> PortMap:
+    """The port map of a reading onto a node whose ports are a turned copy of its departures
+    (a node a merge grew from some reading of the place): with as many ports as departures,
+    the rotation under which the turn is the most uniform; with another number, each port
+    on the departure nearest it under the turn that fits them best (two ports may share one:
+    the place has an edge this reading did not resolve)."""
+    d = len(seen_rad)
+    if len(ports_rad) == d:
+
+        def spread(k: int) -> float:
+            turns = [ports_rad[(i + k) % d] - seen_rad[i] for i in range(d)]
+            return -math.hypot(sum(map(math.cos, turns)), sum(map(math.sin, turns)))
+
+        return PortMap.rotation(min(range(d), key=spread), d, arrival_index)
+
+    def matched(turn: float) -> tuple[float, float, tuple[int, ...]]:
+        index = tuple(
+            min(range(d), key=lambda i: _angdiff(seen_rad[i], b - turn)) for b in ports_rad
+        )
+        off = sum(_angdiff(seen_rad[i], b - turn) for i, b in zip(index, ports_rad, strict=True))
+        return off, turn, index
+
+    # Every port on every departure: the turns worth trying.
+    _, turn, index = min((matched(b - s) for b in ports_rad for s in seen_rad), key=lambda m: m[0])
+    a = arrival_index
+    mine = [p for p, i in enumerate(index) if i == a]
+    if a is None or not mine:
+        return PortMap(index, None)
+    return PortMap(index, min(mine, key=lambda p: _angdiff(ports_rad[p] - turn, seen_rad[a])))
+
+
 def _match_turned(
     seen_rad: Sequence[float],
     a: int,

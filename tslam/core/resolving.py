@@ -5,16 +5,15 @@ pick the move that separates the rest, place the fragments left unattached.
 from __future__ import annotations
 
 import copy
-import math
 from collections.abc import Sequence
 from dataclasses import replace
 
 import networkx as nx
 
-from tslam.core.explorer_state import MAX_CUTS, ExplorerState, angdiff, nearest
+from tslam.core.explorer_state import MAX_CUTS, ExplorerState
 from tslam.core.localize import Hypotheses, Hypothesis, separating_port
 from tslam.core.placements import Placement, other_placements, placements
-from tslam.core.portmap import PortMap
+from tslam.core.portmap import PortMap, turned_onto
 from tslam.core.topomap import EdgeConflictError, MapError, TopoMap
 from tslam.core.tracer import MeetPointReached
 from tslam.core.zipmerge import implies, merge_mapping
@@ -313,7 +312,7 @@ class Resolving(ExplorerState):
             # arbiter), or to a reading with an edge more taken here before (fig14 seed 30
             # with the switch ``vertex``). The port map was the smaller place's, a port
             # short, and a robot sent out by the new port met an index out of range.
-            pm = _turned_reading(n.departures_rad, ev)
+            pm = turned_onto(n.departures_rad, ev.departures_rad, ev.arrival_index)
         self.here = node
         self._last_visit = (node, ev.departures_rad, pm, ev.x_m, ev.y_m)
         if len(set(pm.index)) == len(pm.index) == ev.degree:
@@ -544,31 +543,3 @@ class Resolving(ExplorerState):
             if old is not None and r not in self.port_bearings:
                 n_ports = len(old)
                 self.port_bearings[r] = tuple(old[(p - shift) % n_ports] for p in range(n_ports))
-
-
-def _turned_reading(ports_rad: Sequence[float], ev: MeetPointReached) -> PortMap:
-    """The port map of ``ev`` onto a node whose ports are a turned copy of its departures:
-    the rotation under which the turn is the most uniform. With another number of ports,
-    each port goes to the departure nearest it under the turn that fits them best (two
-    ports may share one: the node's place has an edge the reading did not resolve)."""
-    d, seen = ev.degree, ev.departures_rad
-    if len(ports_rad) == d:
-
-        def spread(k: int) -> float:
-            turns = [ports_rad[(i + k) % d] - seen[i] for i in range(d)]
-            return -math.hypot(sum(map(math.cos, turns)), sum(map(math.sin, turns)))
-
-        return PortMap.rotation(min(range(d), key=spread), d, ev.arrival_index)
-
-    def matched(turn: float) -> tuple[float, tuple[int, ...]]:
-        index = tuple(nearest(b - turn, seen) for b in ports_rad)
-        return sum(angdiff(seen[i], b - turn) for i, b in zip(index, ports_rad, strict=True)), index
-
-    turns = [b - s for b in ports_rad for s in seen]  # every port on every departure
-    turn = min(turns, key=lambda t: matched(t)[0])
-    index = matched(turn)[1]
-    a = ev.arrival_index
-    mine = [p for p, i in enumerate(index) if i == a]
-    if a is None or not mine:
-        return PortMap(index, None)
-    return PortMap(index, min(mine, key=lambda p: angdiff(ports_rad[p] - turn, seen[a])))
