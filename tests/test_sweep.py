@@ -476,6 +476,26 @@ def test_the_middle_face_of_a_concave_bend_is_no_recess():
     assert len(sweep_minima(b, d, recess=True)) == 3
 
 
+def test_a_reading_by_a_bend_vertex_is_no_view_past_it():
+    # fig12's cut corner (seed 3, 394 s): faces 1.38 m and 1.37 m off, the bend's vertex a
+    # plateau of its own 1.47 m off, and beside it one reading 1.56 m off: deeper than the
+    # plateau, but short of the 1.58 m a bend of the plateau and a face make. Taken for an
+    # inner corner's view, the plateau was a recess's back wall, the faces two walls, and
+    # the cut corner a meet point.
+    b = _ring(5.6)
+    deg = np.degrees(b)
+    d = np.full(len(b), np.inf)
+    d[(deg >= 150) & (deg <= 178)] = 1.38
+    d[(deg > 178) & (deg < 183)] = 1.56
+    d[(deg >= 183) & (deg <= 198)] = [1.47, 1.48, 1.47]
+    d[(deg > 198) & (deg <= 203)] = 1.40
+    d[(deg > 208) & (deg <= 240)] = 1.37  # a dropout between: the plateau is no slope
+    assert len(sweep_minima(b, d, recess=True)) == 1
+    # Beyond that vertex the view passes the bend: a recess's inner corner.
+    d[(deg > 178) & (deg < 183)] = 1.66
+    assert len(sweep_minima(b, d, recess=True)) == 3
+
+
 def test_a_sweep_counts_the_firings_that_read_the_minimum_range():
     def scan(ranges: list[float], stamp: float) -> SonarScan:
         yaw = np.arange(4) * math.pi / 2

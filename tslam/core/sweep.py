@@ -371,10 +371,11 @@ def _recessed(
 ) -> bool:
     """Whether ``run`` is a recess's back wall: at least ``RECESS_MIN_RAD`` wide, the runs of
     ``runs`` (in bearing order) on either side of it each at least ``step_m`` nearer, within
-    ``RECESS_FRAME_RAD`` beyond its end, and a view deeper than it between it and one of
-    them: the recess's inner corner. Without one it is the middle face of a concave bend,
-    joined to both (fig12's cut corner, seed 1: faces 1.41 m and 1.44 m off, the middle
-    1.53 m, read as a meet point of degree 4 mid-room)."""
+    ``RECESS_FRAME_RAD`` beyond its end, and a view between it and one of them deeper than
+    it and than the vertex of a bend between the two: the recess's inner corner. Without one
+    it is the middle face of a concave bend, joined to both (fig12's cut corner, seed 1:
+    faces 1.41 m and 1.44 m off, the middle 1.53 m, read as a meet point of degree 4
+    mid-room)."""
     two_pi, n = 2 * math.pi, len(d)
     dist, mid, lo, hi = run
     others = [r for r in runs if r != run]
@@ -389,11 +390,22 @@ def _recessed(
         and (b[after[2]] - b[hi]) % two_pi <= RECESS_FRAME_RAD
     ):
         return False
-    gaps = [range(before[3] + 1, before[3] + 1 + (lo - before[3] - 1) % n)]
-    gaps.append(range(hi + 1, hi + 1 + (after[2] - hi - 1) % n))
-    between = np.array([d[k % n] for gap in gaps for k in gap])
-    seen = between[np.isfinite(between)]
-    return bool(np.any(seen > dist + step_m))
+    sides = (
+        (before, range(before[3] + 1, before[3] + 1 + (lo - before[3] - 1) % n)),
+        (after, range(hi + 1, hi + 1 + (after[2] - hi - 1) % n)),
+    )
+    for frame, gap in sides:
+        between = np.array([d[k % n] for k in gap])
+        seen = between[np.isfinite(between)]
+        # No deeper than the vertex the run and its frame would make as two faces of one
+        # bend: that is the bend's own vertex region (fig12's cut corner, seed 3: faces
+        # 1.38 m and 1.37 m off, its vertex read as a plateau 1.47 m off, one reading 1.56 m
+        # by it, short of the 1.58 m such a bend allows, and read as a recess mid-room).
+        sep = min((mid - frame[1]) % two_pi, (frame[1] - mid) % two_pi)
+        deep = max(dist + step_m, _bend_vertex(frame[0], dist, sep))
+        if np.any(seen > deep):
+            return True
+    return False
 
 
 def _span(d: np.ndarray, lo: int, hi: int, limit: float) -> tuple[np.ndarray, np.ndarray]:
