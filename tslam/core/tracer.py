@@ -208,13 +208,14 @@ class TracerParams:
     # at fig-sized clearances for a cycle or two, and there coasting cost more than it
     # saved (the three benches: 44 runs of 130 complete coasting everywhere, 49 without).
     swing_clearance_m: float = 2.0
-    # The switch ``jump`` (stop 48): a swing is coasted through at any clearance where the
-    # pair's second obstacle is this much further than the last cycle's, beyond what the
-    # robot moved: that obstacle's echo was lost and a wall behind makes the pair (fig12
-    # seed 4 restarted with ``vertex``: 0.3 m out of a junction toward its dead-end corner
-    # the ring read the corner's two walls as one for a cycle, the tangent swung round with
-    # the block's corner 1.7 m off, and the corner's departure was given up). 0: off.
-    swing_jump_m: float = 0.0
+    # The switch ``jump`` (stop 48; on by default since stop 49): a swing is coasted through
+    # at any clearance where the pair's second obstacle is this much further than the last
+    # cycle's, beyond what the robot moved: that obstacle's echo was lost and a wall behind
+    # makes the pair (fig12 seed 4 restarted with ``vertex``: 0.3 m out of a junction toward
+    # its dead-end corner the ring read the corner's two walls as one for a cycle, the
+    # tangent swung round with the block's corner 1.7 m off, and the corner's departure was
+    # given up). 0: off.
+    swing_jump_m: float = 0.15
     # An edge's length drops the points its chain goes out to and comes back from, at this
     # ratio of chords (edgelength.py; inf: none dropped, as up to stop 30).
     edge_spike_ratio: float = 1.5
