@@ -80,6 +80,31 @@ def test_a_whole_map_explored_is_complete():
     assert ex.done and ex.notes[-1].text == "exploration complete: 2 nodes, 1 edges"
 
 
+def test_a_complete_exploration_names_the_departures_it_gave_up():
+    """A departure given up (not held when tried, more than ``bounce_retries`` times) or
+    frozen by an ambiguity is no longer explored; the note calling the exploration complete
+    says which, lest the operator take the map for the whole building."""
+    ex = Explorer(NOMAD200_LIMITS)
+    w = ex.map.add_meet(1.0, [0.0, 2.0, 4.0], (0.0, 0.0))
+    for port, x in enumerate((1.0, 2.0, 3.0)):
+        ex.map.connect(w, port, ex.map.add_boundary(0.4, (x, 0.0)), 0, 1.0)
+    ex._hold(w)
+    assert ex.notes[-1].text == "exploration complete: 4 nodes, 3 edges"
+
+    ex = Explorer(NOMAD200_LIMITS)
+    w = ex.map.add_meet(1.0, [0.0, 2.0, 4.0], (0.0, 0.0))
+    ex.map.connect(w, 0, ex.map.add_boundary(0.4, (1.0, 0.0)), 0, 1.0)
+    for _ in range(ex.p.bounce_retries + 1):
+        ex._count_bounce((w, 1))
+    ex.frozen.add((w, 2))  # as an ambiguity freezes it
+    ex._hold(w)
+    assert ex.done
+    assert ex.notes[-1].text == (
+        "exploration complete: 2 nodes, 1 edges; 1 departure(s) given up, not held when "
+        f"tried and 1 left by an ambiguity (node:departure {w}:1, {w}:2)"
+    )
+
+
 def past_the_junction(c_clearance: float) -> tuple[Explorer, int, int, int, int]:
     """Junction J at (0, 0), dead end B 1.5 m east of it, meet point C 2 m along J's 120 deg
     edge (clearance ``c_clearance``), a second dead end 1 m along its 240 deg edge (every way
