@@ -166,8 +166,8 @@ def test_traced_edges_measure_within_three_percent(tmp_path, capsys):
     distance alone: 16 % at worst, 6 % median). Seed 1 up to stop 36; with ``hold_on`` on
     (stop 37) its trace measures 9 such edges, so seed 2 (12, 1.1 % at worst); with corners
     kept in the ring's gaps (stop 38) seed 2 measures 9, so seed 10 (12, 0.8 % at worst); with a
-    swing past a far jump coasted (stop 49) seed 10 turns into dead ends and measures 3, so seed
-    8 (12, 1.3 % at worst)."""
+    swing past a far jump coasted (stop 49) seed 10 measures 3, so seed 8 (12, 1.3 % at
+    worst)."""
     code = main(
         ["trace", "--world", "fig12", "--edges", "12", "--seed", "8", "--out", str(tmp_path)]
     )

@@ -197,7 +197,6 @@ class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolvin
             parts.append(f"{len(out) - len(given_up)} left by an ambiguity")
         where = ", ".join(f"{n}:{p}" for n, p in out)
         return f"; {' and '.join(parts)} (node:departure {where})"
-
     def _watch_detour(self, odo: Odometry) -> None:
         b = self.tracer.behaviour
         if b in (Behaviour.ACCESS, Behaviour.BACKOFF):
