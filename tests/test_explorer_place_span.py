@@ -9,6 +9,7 @@ import math
 from hal.interfaces import NOMAD200_LIMITS
 from tests.test_explorer_past import _add, meet
 from tslam.core.explorer import Explorer, ExplorerParams
+from tslam.core.portmap import PortMap
 
 CORRIDOR = [90, 163, 197, 270]  # the place read at the corridor's point: N, indent x2, S
 AT_WEAK = [88, 158, 203, 272]  # ... and at the weak point, 0.37 m west
@@ -67,3 +68,68 @@ def test_the_switch_off_keeps_the_signature_tolerance():
     ex, c = _up_from_the_south(0.37, ExplorerParams(place_span_clearance=False))
     assert _home_at_the_weak_point(ex) != c
     assert math.isclose(ex.map.node(c).clearance_m, 1.14)
+
+
+def _back_from_the_indent(params: ExplorerParams | None = None) -> tuple[Explorer, int]:
+    """The place mapped at the corridor's point (1.15 m clear), read there only; its indent
+    departure traced 0.86 m west to a dead end; the robot leaves the dead end for it."""
+    ex = Explorer(NOMAD200_LIMITS, params=params)
+    c = _add(ex, 1.15, CORRIDOR, 0.0)
+    b = ex.map.add_boundary(0.44, (-0.8, -0.3))
+    ex.map.connect(c, CORRIDOR.index(197), b, 0, 0.86)
+    ex.leaving = (b, 0)
+    return ex, c
+
+
+def test_homed_a_little_short_of_a_place_is_at_its_other_point():
+    """fig16 seed 19: back from the indent's dead end, homed at the weak meet point 0.55 m
+    along the 0.86 m edge (here 0.50 m, too short for the edge's own length tolerance), with
+    the place's four edges and 0.89 m clear. Taken for a weak meet point halfway, the robot
+    went on through the place and up the corridor, was lost at the far junction, and the
+    place's other edges were never explored."""
+    ex, c = _back_from_the_indent()
+    node, pm = ex._arrive(meet(-0.37, 0.0, AT_WEAK, 203, 0.50, 0.89))
+    assert node == c and len(pm.index) == 4
+    assert ex.notes[-1].text.startswith(f"node {c} read 0.36 m short of its edge's end")
+    assert ex.span[c] > 0.3  # the place's edges may now end at either point
+
+
+def test_homed_further_short_it_is_no_point_of_the_place():
+    # Half a metre short the clearance may be off by as much, but a place spans less.
+    ex, c = _back_from_the_indent()
+    ex._arrive(meet(-0.37, 0.0, AT_WEAK, 203, 0.36, 0.89))
+    assert not any(n.text.startswith(f"node {c} read") for n in ex.notes), ex.notes
+    # And without the rule the weak point is not the place.
+    ex, c = _back_from_the_indent(ExplorerParams(short_place_m=0.0))
+    node, _ = ex._arrive(meet(-0.37, 0.0, AT_WEAK, 203, 0.50, 0.89))
+    assert node != c
+
+
+def test_back_from_a_dead_end_the_bearings_say_which_way_the_robot_came_in():
+    """fig16 seed 18: back from the indent's dead end at the place's other point, 0.41 m
+    from where the place was last read, the tracer took the indent's other departure for
+    its way in; matched from that, the reading fitted no rotation of the place: "lost", and
+    the place and its corridor went into the map again; with the place read at both its
+    points, the edge's length fits, and the topology alone took it, its ports turned by one.
+    The absolute bearings, good over the way out and back, give each departure its port and
+    the way in with them."""
+    deps = tuple(math.radians(d) for d in CORRIDOR)
+
+    def back(params: ExplorerParams | None = None, span_m: float = 0.37, at: float = 0.0):
+        ex, c = _back_from_the_indent(params)
+        ex.span[c] = span_m  # the place read at both its points
+        ex._last_visit = (c, deps, PortMap((0, 1, 2, 3), 3), at, 0.0)
+        node, pm = ex._arrive(meet(-0.37, 0.0, AT_WEAK, 158, 0.50, 0.89))
+        return ex, c, node, pm
+
+    ex, c, node, pm = back()
+    assert node == c and pm.arrival == CORRIDOR.index(197)
+    assert pm.index == (0, 1, 2, 3)
+    assert ex.notes[-1].text.endswith("by its bearings: in by departure 2, not 1")
+    # Without the bearings the place is taken by topology, its ports turned by one.
+    assert back(ExplorerParams(back_by_bearings=False))[3].index == (3, 0, 1, 2)
+    # Not read at two points, the node 0.37 m off may be a twin junction; and a metre off
+    # it is not the place just left: the bearings say nothing.
+    assert back(span_m=0.0)[2] != c
+    ex = back(at=1.0)[0]
+    assert not any("by its bearings" in n.text for n in ex.notes), ex.notes

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from tslam.core.portmap import PortMap, match_by_angle
+from tslam.core.portmap import PortMap, bearing_shift, match_by_angle
 
 R = math.radians
 
@@ -85,3 +85,10 @@ def test_a_turned_match_keeps_the_arrival_within_its_slack_and_the_turn_within_d
     # Dead reckoning does not turn that far between two readings of one place.
     kw = {"arrival_slack_rad": R(45), "max_turn_rad": R(40)}
     assert match_by_angle(seen, 0, ports, 2, R(25), **kw) is None
+
+
+def test_the_bearing_shift_pairs_departures_by_absolute_bearing():
+    then = [math.radians(d) for d in (20, 162, 252, 290)]
+    now = [math.radians(d) for d in (145, 235, 291, 362)]  # the first read past 360
+    assert bearing_shift(now, then, math.radians(20)) == 1
+    assert bearing_shift(now, then, math.radians(15)) is None  # 145 is 17 degrees off 162

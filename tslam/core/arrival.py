@@ -8,7 +8,7 @@ import math
 
 from tslam.core.explorer_state import MAX_CUTS, ExplorerState, Past, angdiff, nearest
 from tslam.core.localize import Hypothesis, Prediction, arrival_matches, candidates, predict
-from tslam.core.portmap import PortMap
+from tslam.core.portmap import PortMap, bearing_shift
 from tslam.core.signature import Signature
 from tslam.core.tracer import MeetPointReached
 
@@ -87,13 +87,8 @@ class Arrival(ExplorerState):
         # Same place, seconds later: absolute bearings still agree, so they fix the rotation.
         # A twin junction a few decimetres away has other bearings (one of its edges leads
         # back to the point just left), which tells it from a bounce.
-        def misfit(k: int) -> float:
-            return max(
-                angdiff(ev.departures_rad[i], deps[(i + k) % ev.degree]) for i in range(ev.degree)
-            )
-
-        shift = min(range(ev.degree), key=misfit)
-        if misfit(shift) > p.bounce_angle_rad:
+        shift = bearing_shift(ev.departures_rad, deps, p.bounce_angle_rad)
+        if shift is None:
             return None
         key = self.leaving
         pm = pm.shifted_events(shift, ev.degree)
@@ -193,6 +188,77 @@ class Arrival(ExplorerState):
         self._note(f"node {node} read again as its place, with {ev.degree} edges")
         return node, PortMap(tuple(range(ev.degree)), arrival)
 
+    def _back_by_bearings(
+        self, ev: MeetPointReached, w: int, q: int
+    ) -> tuple[PortMap, float] | None:
+        """Back from a dead end by port ``q`` of ``w``, the node read last, within ``twin_m``
+        of where it was read or within the place it was read at (``place_hop_m`` at most):
+        the departures' absolute bearings, still good over the way out and back, say which is
+        which, and the one they give port ``q`` is the way the robot came in, whichever the
+        tracer took for it. fig16 seed 18, back from the indent's dead end at the place's
+        other point 0.41 m from where it was read, took the indent's other departure for its
+        way in (the one at 291 degrees, not at 235; the place's reading had it at 252): "lost
+        (expected node 1 ...)", and the place and its corridor were mapped again. The port
+        map and how far the robot homed from where it read ``w``; None if the bearings do not
+        all agree within ``bounce_angle_rad`` under one shift."""
+        lv = self._last_visit
+        if lv is None or lv[0] != w or ev.degree != len(lv[1]):
+            return None
+        _, deps, pm, x, y = lv
+        moved = math.hypot(ev.x_m - x, ev.y_m - y)
+        # Further than a twin junction lies, only within the place the node was read at.
+        reach = min(self.p.place_hop_m, self.p.twin_m + self.span.get(w, 0.0))
+        if moved > reach or not len(pm.index) == self.map.node(w).degree == ev.degree:
+            return None
+        shift = bearing_shift(ev.departures_rad, deps, self.p.bounce_angle_rad)
+        if shift is None:
+            return None
+        return PortMap(pm.shifted_events(shift, ev.degree).index, q), moved
+
+    def _by_bearings(
+        self, ev: MeetPointReached, f: int, w: int, pm: PortMap, moved: float
+    ) -> PortMap:
+        """``w`` arrived at as ``_back_by_bearings`` reads it."""
+        if ev.arrival_index != pm.index[pm.arrival]:
+            self._note(
+                f"node {w} read again back from boundary {f}, by its bearings: in by departure "
+                f"{pm.index[pm.arrival]}, not {ev.arrival_index}"
+            )
+        self._spans(w, moved, (w, pm))
+        self.partial_m = 0.0
+        return pm
+
+    def _short_of_place(
+        self,
+        ev: MeetPointReached,
+        seen: Signature,
+        a: int,
+        e: int,
+        w: int,
+        q: int,
+        length: float,
+        slack: float,
+        near: float,
+    ) -> int | None:
+        """The rotation under which a meet point homed onto less than ``short_place_m``
+        short of where edge ``e`` ends is ``w`` read at its place's other point: its length
+        and clearance may be off by that much (the clearance changes by no more than the robot
+        moves). fig16 seed 19, back from the indent's dead end, homed at the weak meet point
+        0.31 m short of the corridor's, with the place's four edges and 0.89 m clear for
+        1.15 m; taken for a weak meet point halfway, the robot went on through the place, up
+        the corridor to the far junction, was lost there, and the place's three other edges
+        were never explored. None if it is not."""
+        rest = self.map.edge(e).length_m - length
+        if not 0.0 < rest < self.p.short_place_m:
+            return None
+        k = self._match(ev, seen, a, w, q, length, length + rest, slack + rest, near + rest)
+        if k is None:
+            return None
+        self.span[w] = max(self.span.get(w, 0.0), rest)
+        self.partial_m = 0.0
+        self._note(f"node {w} read {rest:.2f} m short of its edge's end: its place's other point")
+        return k
+
     def _expected(
         self, ev: MeetPointReached, seen: Signature, f: int, j: int, e: int, length: float | None
     ) -> tuple[int, int | PortMap]:
@@ -211,6 +277,11 @@ class Arrival(ExplorerState):
         near = self.span.get(w, 0.0) if self.p.place_span_clearance else 0.0
         k = self._match(ev, seen, a, w, q, length, edge.length_m, slack, near)
         back = k is None and self.map.node(f).kind == "boundary"
+        bearings = self._back_by_bearings(ev, w, q) if back and self.p.back_by_bearings else None
+        if bearings is not None and bearings[0].index[q] != a:
+            # The tracer took another departure for the way in: the rules below would turn
+            # the place's ports by one (fig16 seeds 1 and 18).
+            return w, self._by_bearings(ev, f, w, *bearings)
         dead_end = back and self.map.node(w).degree == ev.degree
         # None when no recent pass can say; a twin junction a few decimetres on has the same
         # topology from a dead end.
@@ -245,6 +316,8 @@ class Arrival(ExplorerState):
                 self.estimated.discard(e)
             self.partial_m = 0.0
             return w, k
+        if bearings is not None:
+            return w, self._by_bearings(ev, f, w, *bearings)
         # Dead reckoning that puts the robot elsewhere than where it left for the dead end
         # vetoes an arrival read askew (a twin junction, as above).
         pm = self._read_otherwise(
@@ -275,6 +348,9 @@ class Arrival(ExplorerState):
         through = self._through_port(ev) if short else None
         if short and not self.disturbed:
             assert length is not None
+            at = self._short_of_place(ev, seen, a, e, w, q, length, slack, near)
+            if at is not None:
+                return w, at
             split = None
             if self.p.split_open or through is None:
                 split = self._missed_junction(ev, f, j, e, length)

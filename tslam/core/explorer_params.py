@@ -95,6 +95,13 @@ class ExplorerParams:
     # ... and with that much more clearance slack on arriving at the node, the clearance at
     # its two points differing by at most their distance (False: the signature's tolerance).
     place_span_clearance: bool = True
+    # A meet point homed onto less than this short of where the edge ends, and fitting its
+    # node there but for that much length and clearance, is the node's place read at its
+    # other point (``Arrival._short_of_place``; 0: off).
+    short_place_m: float = 0.4
+    # Back from a dead end at the node read last, within ``place_hop_m`` of where: its ports by
+    # the departures' absolute bearings, the way in whichever they give (``_back_by_bearings``).
+    back_by_bearings: bool = True
     # An edge whose length is a walk's remainder is matched with this much more slack, until
     # a traversal measures it: fig12 seed 10 mapped a dead end at 1.17 m so and, back along
     # it, homed at its junction after 1.55 m, 4 cm beyond the tolerance, and went lost.

@@ -46,6 +46,21 @@ class PortMap:
         return PortMap(tuple((i - shift) % degree for i in self.index), self.arrival)
 
 
+def bearing_shift(
+    now_rad: Sequence[float], then_rad: Sequence[float], tol_rad: float
+) -> int | None:
+    """The shift ``k`` under which departure ``i`` read now is departure ``i + k`` read then,
+    both by absolute bearing (dead reckoning's heading is good over seconds); None unless
+    every pair agrees within ``tol_rad`` under it."""
+    n = len(now_rad)
+
+    def misfit(k: int) -> float:
+        return max(_angdiff(now_rad[i], then_rad[(i + k) % n]) for i in range(n))
+
+    shift = min(range(n), key=misfit)
+    return shift if misfit(shift) <= tol_rad else None
+
+
 def match_by_angle(
     seen_rad: Sequence[float],
     arrival_index: int,
