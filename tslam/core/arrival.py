@@ -254,7 +254,8 @@ class Arrival(ExplorerState):
         k = self._match(ev, seen, a, w, q, length, length + rest, slack + rest, near + rest)
         if k is None:
             return None
-        self.span[w] = max(self.span.get(w, 0.0), rest)
+        if self.p.place_span_slack:
+            self.span[w] = max(self.span.get(w, 0.0), rest)
         self.partial_m = 0.0
         self._note(f"node {w} read {rest:.2f} m short of its edge's end: its place's other point")
         return k
@@ -279,8 +280,8 @@ class Arrival(ExplorerState):
         back = k is None and self.map.node(f).kind == "boundary"
         bearings = self._back_by_bearings(ev, w, q) if back and self.p.back_by_bearings else None
         if bearings is not None and bearings[0].index[q] != a:
-            # The tracer took another departure for the way in: the rules below would turn
-            # the place's ports by one (fig16 seeds 1 and 18).
+            # The tracer took another departure for the way in: the rules below turned the
+            # place's ports by one (fig16 seed 1) or found no rotation (seed 18).
             return w, self._by_bearings(ev, f, w, *bearings)
         dead_end = back and self.map.node(w).degree == ev.degree
         # None when no recent pass can say; a twin junction a few decimetres on has the same
