@@ -133,3 +133,31 @@ def test_back_from_a_dead_end_the_bearings_say_which_way_the_robot_came_in():
     assert back(span_m=0.0)[2] != c
     ex = back(at=1.0)[0]
     assert not any("by its bearings" in n.text for n in ex.notes), ex.notes
+
+
+def test_back_from_a_dead_end_with_an_edge_fewer_the_bearings_pair_the_two_read_as_one():
+    """fig16 seed 18: the place read with its four edges at the weak point, then, back there
+    from the indent's dead end, with three: the corridor's two as one departure, east.
+    Matched by angle to the ports read at the corridor's point, the indent's other edge
+    shared a departure with the corridor's south one; left by a bearing between the two,
+    the robot drove into the first dead end three times and gave the other up. The bearings
+    of the reading just before pair the corridor's two instead."""
+    weak = tuple(math.radians(d) for d in AT_WEAK)
+
+    def back(params: ExplorerParams | None = None) -> tuple[Explorer, int, int, PortMap]:
+        ex, c = _back_from_the_indent(params)
+        ex.span[c] = 0.37
+        ex._last_visit = (c, weak, PortMap((0, 1, 2, 3), 0), -0.37, 0.0)
+        node, pm = ex._arrive(meet(-0.37, 0.0, [0, 158, 203], 203, 0.86, 0.89))
+        return ex, c, node, pm
+
+    ex, c, node, pm = back()
+    assert node == c and pm.arrival == CORRIDOR.index(197)
+    # North and south on the one departure east; each indent edge on its own.
+    assert pm.index == (0, 1, 2, 0)
+    assert ex.notes[-1].text.endswith("by its bearings: departures 0 and 3 as one")
+    assert ex._misread == c  # its next departure is unsure, as after any reading askew
+    # Without the rule the angle match pairs an indent edge with a corridor one.
+    _, _, node, pm = back(ExplorerParams(back_merged=False))
+    assert node == c and pm.index != (0, 1, 2, 0)
+    assert pm.index.count(pm.index[CORRIDOR.index(163)]) == 2

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from tslam.core.portmap import PortMap, bearing_shift, match_by_angle
+from tslam.core.portmap import PortMap, bearing_shift, match_by_angle, merged_by_bearing
 
 R = math.radians
 
@@ -92,3 +92,31 @@ def test_the_bearing_shift_pairs_departures_by_absolute_bearing():
     now = [math.radians(d) for d in (145, 235, 291, 362)]  # the first read past 360
     assert bearing_shift(now, then, math.radians(20)) == 1
     assert bearing_shift(now, then, math.radians(15)) is None  # 145 is 17 degrees off 162
+
+
+def test_a_reading_with_an_edge_fewer_pairs_two_neighbours_by_absolute_bearing():
+    # fig16 seed 18 at the weak meet point: read with four edges, then back from the
+    # indent's dead end with three, the corridor's two seen as one between them.
+    then = [math.radians(d) for d in (27, 150, 236, 293)]
+    now = [math.radians(d) for d in (88, 239, 295)]
+    assert merged_by_bearing(now, then, math.radians(20)) == (0, 0, 1, 2)
+    # The pair may lie across north.
+    then = [math.radians(d) for d in (10, 100, 200, 310)]
+    assert merged_by_bearing([R(100), R(200), R(340)], then, R(20)) == (2, 0, 1, 2)
+    assert merged_by_bearing([R(100), R(200), R(345)], then, R(20)) == (2, 0, 1, 2)
+
+
+def test_an_edge_fewer_by_bearing_wants_the_rest_to_agree_and_the_pair_to_neighbour():
+    then = [math.radians(d) for d in (27, 150, 236, 293)]
+
+    def merged(*now: float) -> tuple[int, ...] | None:
+        return merged_by_bearing([math.radians(d) for d in now], then, math.radians(20))
+
+    assert merged(88, 262, 295) is None  # 236 read 26 degrees off
+    assert merged(88, 239, 295, 30) is None  # as many edges: not a merge
+    assert merged(100, 239) is None  # two fewer
+    # The one read for two must lie between them, and well inside: here 150 was lost and
+    # 236 read 3 degrees past itself, or 3 degrees short (236 read, either way).
+    assert merged(12, 239, 295) is None
+    assert merged(12, 233, 295) is None
+    assert merged(12, 200, 295) == (0, 1, 1, 2)

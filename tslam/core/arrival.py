@@ -8,7 +8,7 @@ import math
 
 from tslam.core.explorer_state import MAX_CUTS, ExplorerState, Past, angdiff, nearest
 from tslam.core.localize import Hypothesis, Prediction, arrival_matches, candidates, predict
-from tslam.core.portmap import PortMap, bearing_shift
+from tslam.core.portmap import PortMap, bearing_shift, merged_by_bearing
 from tslam.core.signature import Signature
 from tslam.core.tracer import MeetPointReached
 
@@ -202,24 +202,45 @@ class Arrival(ExplorerState):
         map and how far the robot homed from where it read ``w``; None if the bearings do not
         all agree within ``bounce_angle_rad`` under one shift."""
         lv = self._last_visit
-        if lv is None or lv[0] != w or ev.degree != len(lv[1]):
+        if lv is None or lv[0] != w:
             return None
         _, deps, pm, x, y = lv
         moved = math.hypot(ev.x_m - x, ev.y_m - y)
         # Further than a twin junction lies, only within the place the node was read at.
         reach = min(self.p.place_hop_m, self.p.twin_m + self.span.get(w, 0.0))
-        if moved > reach or not len(pm.index) == self.map.node(w).degree == ev.degree:
+        d = self.map.node(w).degree
+        if moved > reach or len(pm.index) != d:
             return None
-        shift = bearing_shift(ev.departures_rad, deps, self.p.bounce_angle_rad)
-        if shift is None:
+        tol = self.p.bounce_angle_rad
+        if ev.degree == len(deps) == d:
+            shift = bearing_shift(ev.departures_rad, deps, tol)
+            if shift is None:
+                return None
+            return PortMap(pm.shifted_events(shift, ev.degree).index, q), moved
+        if not self.p.back_merged or ev.degree != d - 1 or not len(set(pm.index)) == len(deps) == d:
             return None
-        return PortMap(pm.shifted_events(shift, ev.degree).index, q), moved
+        # Read with two of its edges as one, which the last reading had apart (fig16 seed 18,
+        # back from the indent at the weak meet point: the corridor's two edges as one
+        # departure). Matched by angle to the node's ports, read at its other point, the
+        # indent's second edge shared the first's departure; left by a bearing between them,
+        # the robot went into the first's dead end three times, and gave the second up.
+        merged = merged_by_bearing(ev.departures_rad, deps, tol)
+        if merged is None:
+            return None
+        return PortMap(tuple(merged[i] for i in pm.index), q), moved
 
     def _by_bearings(
         self, ev: MeetPointReached, f: int, w: int, pm: PortMap, moved: float
     ) -> PortMap:
         """``w`` arrived at as ``_back_by_bearings`` reads it."""
-        if ev.arrival_index != pm.index[pm.arrival]:
+        if ev.degree != len(pm.index):
+            shared = [p for p, i in enumerate(pm.index) if pm.index.count(i) > 1]
+            self._note(
+                f"node {w} read again back from boundary {f} with {ev.degree} edges, by its "
+                f"bearings: departures {' and '.join(map(str, shared))} as one"
+            )
+            self._misread = w
+        elif ev.arrival_index != pm.index[pm.arrival]:
             self._note(
                 f"node {w} read again back from boundary {f}, by its bearings: in by departure "
                 f"{pm.index[pm.arrival]}, not {ev.arrival_index}"
@@ -279,9 +300,12 @@ class Arrival(ExplorerState):
         k = self._match(ev, seen, a, w, q, length, edge.length_m, slack, near)
         back = k is None and self.map.node(f).kind == "boundary"
         bearings = self._back_by_bearings(ev, w, q) if back and self.p.back_by_bearings else None
-        if bearings is not None and bearings[0].index[q] != a:
+        if bearings is not None and (
+            bearings[0].index[q] != a or ev.degree != self.map.node(w).degree
+        ):
             # The tracer took another departure for the way in: the rules below turned the
-            # place's ports by one (fig16 seed 1) or found no rotation (seed 18).
+            # place's ports by one (fig16 seed 1) or found no rotation (seed 18); or two
+            # edges were read as one, which the angle match below pairs by guesswork.
             return w, self._by_bearings(ev, f, w, *bearings)
         dead_end = back and self.map.node(w).degree == ev.degree
         # None when no recent pass can say; a twin junction a few decimetres on has the same

@@ -102,6 +102,9 @@ class ExplorerParams:
     # Back from a dead end at the node read last, within ``place_hop_m`` of where: its ports by
     # the departures' absolute bearings, the way in whichever they give (``_back_by_bearings``).
     back_by_bearings: bool = True
+    # ... also read there with an edge fewer, two of its ports as one departure between them
+    # (``portmap.merged_by_bearing``).
+    back_merged: bool = True
     # An edge whose length is a walk's remainder is matched with this much more slack, until
     # a traversal measures it: fig12 seed 10 mapped a dead end at 1.17 m so and, back along
     # it, homed at its junction after 1.55 m, 4 cm beyond the tolerance, and went lost.

@@ -61,6 +61,39 @@ def bearing_shift(
     return shift if misfit(shift) <= tol_rad else None
 
 
+def merged_by_bearing(
+    now_rad: Sequence[float], then_rad: Sequence[float], tol_rad: float
+) -> tuple[int, ...] | None:
+    """For a reading with one departure fewer than one taken moments before at the same
+    point: ``index[i]``, the departure read now that departure ``i`` read then leads along,
+    by absolute bearing (dead reckoning's heading is good over seconds). Two neighbouring
+    departures read then are one now, between them, however far from either (fig16's
+    corridor edges, read from the weak meet point 60 to 90 degrees either side of the one
+    departure they share) but more than ``tol_rad``; every other agrees within ``tol_rad``
+    with one of its own. None unless exactly one pair makes the reading so."""
+    n = len(then_rad)
+    if len(now_rad) != n - 1 or n < 3:
+        return None
+    order = sorted(range(n), key=lambda i: then_rad[i] % TAU)
+    found = []
+    for k in range(n):
+        lo, hi = order[k], order[(k + 1) % n]
+        index = [min(range(n - 1), key=lambda m: _angdiff(now_rad[m], b)) for b in then_rad]
+        alone = [i for i in range(n) if i not in (lo, hi)]
+        if any(_angdiff(now_rad[index[i]], then_rad[i]) > tol_rad for i in alone):
+            continue
+        rest = set(range(n - 1)) - {index[i] for i in alone}
+        if len(rest) != 1:
+            continue
+        index[lo] = index[hi] = m = rest.pop()
+        # Well inside: read within ``tol_rad`` of either, that one may be read and the other
+        # lost, as well as the two merged.
+        inside = (now_rad[m] - then_rad[lo]) % TAU
+        if tol_rad < inside < (then_rad[hi] - then_rad[lo]) % TAU - tol_rad:
+            found.append(tuple(index))
+    return found[0] if len(found) == 1 else None
+
+
 def match_by_angle(
     seen_rad: Sequence[float],
     arrival_index: int,
