@@ -11,7 +11,7 @@ from hal.interfaces import NOMAD200_LIMITS
 from hal.types import Odometry, Twist
 from tests.test_explorer_split import drive, meet
 from tests.tracer_paths import GIVING_UP
-from tslam.core.explorer import Explorer
+from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.tracer import BoundaryReached, MeetPointReached
 from tslam.programs.sim_cmd import explore
 
@@ -210,15 +210,26 @@ def test_back_from_a_dead_end_a_junction_read_with_an_edge_fewer_is_the_one_left
     """fig13's 0.29 m pair, read as its place with four edges, is left for the dead end of its
     second point; back from it, the robot homes onto the first point and reads three: the
     same place by dead reckoning, not a new node (fig13 seed 1, switch hold_on, 87 s)."""
-    ex = Explorer(NOMAD200_LIMITS)
-    node, pm = ex._arrive(back_from_the_place_s_dead_end(ex, (0.0, 0.02)))
-    assert node == 1 and len(ex.map.nodes()) == 2
-    assert ex.notes[-1].text == (
-        "node 1 confirmed by dead reckoning (back from boundary 2) although read with "
-        "degree 3, not 4"
-    )
-    # Ports 2, 75, 186 and 293 deg: the 2-deg one leads off along the arrival's 333 too.
-    assert pm.index == (2, 0, 1, 2) and pm.arrival == 3
+    for params, note in (
+        # The bearings of the reading just left pair the two read as one (``back_merged``) ...
+        (
+            None,
+            "node 1 read again back from boundary 2 with 3 edges, by its bearings: "
+            "departures 0 and 3 as one",
+        ),
+        # ... and without them dead reckoning says it is the place, matched by angle.
+        (
+            ExplorerParams(back_merged=False),
+            "node 1 confirmed by dead reckoning (back from "
+            "boundary 2) although read with degree 3, not 4",
+        ),
+    ):
+        ex = Explorer(NOMAD200_LIMITS, params=params)
+        node, pm = ex._arrive(back_from_the_place_s_dead_end(ex, (0.0, 0.02)))
+        assert node == 1 and len(ex.map.nodes()) == 2
+        assert ex.notes[-1].text == note
+        # Ports 2, 75, 186 and 293 deg: the 2-deg one leads off along the arrival's 333 too.
+        assert pm.index == (2, 0, 1, 2) and pm.arrival == 3
 
 
 def test_read_with_an_edge_fewer_at_another_junction_is_not_the_one_left():
