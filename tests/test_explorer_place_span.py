@@ -6,10 +6,15 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from hal.interfaces import NOMAD200_LIMITS
+from hal.types import Odometry
 from tests.test_explorer_past import _add, meet
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.portmap import PortMap
+from tslam.core.tracer import Behaviour
+from tslam.programs.sim_cmd import explore, report
 
 CORRIDOR = [90, 163, 197, 270]  # the place read at the corridor's point: N, indent x2, S
 AT_WEAK = [88, 158, 203, 272]  # ... and at the weak point, 0.37 m west
@@ -161,3 +166,38 @@ def test_back_from_a_dead_end_with_an_edge_fewer_the_bearings_pair_the_two_read_
     _, _, node, pm = back(ExplorerParams(back_merged=False))
     assert node == c and pm.index != (0, 1, 2, 0)
     assert pm.index.count(pm.index[CORRIDOR.index(163)]) == 2
+
+
+def test_a_departure_not_held_from_a_place_is_tried_again_straight_across_it():
+    """fig16 seed 62: sent from the corridor's meet point into the indent's second dead end,
+    the trace law took the first one's pair at the weak meet point 0.36 m on (not homed: the
+    meet point just left) twice, and the departure was given up. Tried again, the robot goes
+    on straight across the place and 0.2 m beyond before tracing; on a first try it traces at
+    once (straight on every departure from a place, fewer runs completed)."""
+    ex, c = _up_from_the_south(0.37)
+    port = CORRIDOR.index(197)
+    assert ex._across_place(c, port) == 0.0
+    ex.bounces[(c, port)] = 1
+    assert ex._across_place(c, port) == pytest.approx(ex.tracer.p.depart_m + 0.37 + 0.2)
+    assert ex._across_place(c, CORRIDOR.index(163)) == 0.0  # that one was held
+    ex.span[c] = 0.0  # read at one point only: no place to cross
+    assert ex._across_place(c, port) == 0.0
+    # The tracer goes on straight only on a departure it has just begun.
+    tracer = ex.tracer
+    tracer.depart(math.radians(197), Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+    tracer.go_straight(0.72)
+    tracer.go_straight(0.3)
+    assert tracer.s.depart_m == pytest.approx(0.72)
+    tracer.s.behaviour = Behaviour.TRACE
+    tracer.go_straight(1.0)
+    assert tracer.s.depart_m == pytest.approx(0.72)
+
+
+def test_fig16_seed_62_holds_the_indent_s_second_edge_when_tried_again_straight():
+    """The whole run: with ``place_straight_m`` every edge is explored and the map is right;
+    without it the indent's second edge is given up."""
+    for params, whole in ((None, True), (ExplorerParams(place_straight_m=0.0), False)):
+        run = explore("fig16", 62, "paper", duration_s=3000.0, progress=False, params=params)
+        rep = report(run, "fig16", 62, "paper")
+        assert rep["finished"] and rep["false_merges"] == 0
+        assert rep["complete"] is whole, rep

@@ -105,6 +105,9 @@ class ExplorerParams:
     # ... also read there with an edge fewer, two of its ports as one departure between them
     # (``portmap.merged_by_bearing``).
     back_merged: bool = True
+    # Leaving a place read at two points, go on straight along the departure across it and
+    # this much beyond before tracing (``Explorer._across_place``; 0: trace at once).
+    place_straight_m: float = 0.2
     # An edge whose length is a walk's remainder is matched with this much more slack, until
     # a traversal measures it: fig12 seed 10 mapped a dead end at 1.17 m so and, back along
     # it, homed at its junction after 1.55 m, 4 cm beyond the tolerance, and went lost.

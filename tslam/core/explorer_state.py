@@ -118,6 +118,7 @@ class ExplorerState:
         # ports share (``_departure_bearing``).
         self.port_bearings: dict[int, tuple[float, ...]] = {}
         self._depart_along: float | None = None
+        self._straight_m = 0.0  # go on straight this far along the departure (_across_place)
         self._now = 0.0
         self._odo: Odometry | None = None
         self.paths = EdgePaths()

@@ -958,6 +958,12 @@ class Tracer:
         if until_sides_m is not None:
             self.s.until_sides_m = until_sides_m
 
+    def go_straight(self, distance_m: float) -> None:
+        """On a departure just begun, go on straight along it at least ``distance_m`` from the
+        meet point before tracing."""
+        if self.s.behaviour is Behaviour.DEPART:
+            self.s.depart_m = max(self.s.depart_m, distance_m)
+
     def _start_depart(self, direction: float, odo: Odometry, distance: float | None = None) -> None:
         s = self.s
         s.behaviour = Behaviour.DEPART
