@@ -2,8 +2,9 @@
 resolve, section VII-B's weak meet points): the map joins the two places either side of it,
 and that one wrong edge refutes the true hypotheses that cross it and keeps the place itself
 from ever being a candidate, so the map copies everything beyond. ``ExplorerParams.cut_past``
-(off by default) repairs such edges (``Explorer._past_a_junction``, ``_cut_conflicts``),
-and ``past_candidates`` (off) makes such a place a candidate (``_past_candidates``); a
+(on by default since stop 50) repairs such edges (``Explorer._past_a_junction``,
+``_cut_conflicts``), and ``past_candidates`` (on, the same) makes such a place a candidate
+(``_past_candidates``); a
 junction found partway along a known edge goes into the map
 (``split_open``, on); ``verify_edges`` (off) goes back along edges traced once."""
 

@@ -224,14 +224,19 @@ class ExplorerParams:
     # (fig13 seed 10, back at the 0.29 m pair, went east through meet point 9 unhomed to meet
     # point 8, 7.8 m for the 3.5 m predicted, and the true hypothesis died), but 42 runs
     # cover every place and edge against 45, and `tslam bench explore --drifts paper --seeds
-    # 1,...,6` 25 of 36 against 30 (README, stop 45).
-    cut_past: bool = False
+    # 1,...,6` 25 of 36 against 30 (README, stop 45). On since stop 50, with
+    # ``past_candidates``: on the code of stops 46-50 seeds 1-24 complete 80 of 120 against 76
+    # (fig13 9 against 6, fig14's seed 6; README, stop 50).
+    cut_past: bool = True
     # ... and a new node may be an old one whose departure the robot came by is explored by
     # such an edge (``_past_candidates``). Off: a restart against a stored map of fig12 (the
     # daemon's, killed after its first edge) then took another way, into a copy of a
     # junction reached by a departure not held, and never finished; with it, 30 of the 60
-    # runs above complete on stop 44's code, against 32 without.
-    past_candidates: bool = False
+    # runs above complete on stop 44's code, against 32 without. On since stop 50, with
+    # ``cut_past`` (above): fig1 seed 13 came to meet point 2 by a new edge that went past
+    # meet point 1 unhomed, 5.6 m for 2.8, and with no candidate but two wrong look-alikes
+    # mapped the building again.
+    past_candidates: bool = True
     # A meet point found partway along a known edge goes into the map, even with a departure
     # straight on: placed on the edge by the recent pass if there is one, else the rest of
     # the edge is forgotten (``_junction_on_edge``). Off, as before stop 28: such a junction
