@@ -198,13 +198,19 @@ def test_restarted_elsewhere_a_dead_end_reached_deeper_confirms_the_placement():
     """Seed 2: stopped nearer the walls than when it was mapped, the robot reached a dead end
     0.68 m out where the map has it 0.40 m out, and the true placement was refuted there; the
     restarted robot mapped the building anew (68 nodes). The length may now be longer by half
-    as far again as the robot stopped nearer. With a swing past a far jump coasted (stop 49) the
-    restarted robot is placed whole with or without that slack, so the case is kept on the
-    tracer it was found with."""
+    as far again as the robot stopped nearer. With a swing past a far jump coasted (stop 49),
+    or with edges that went past a junction repaired (``cut_past``, stop 50), the restarted
+    robot is placed whole with or without that slack, so the case is kept on the tracer and
+    the arbiter it was found with."""
     ex, score = _restarted_elsewhere(2)
     assert ex.merges and _whole(ex, score)
     found_with = TracerParams(swing_jump_m=0.0)
     ex, score = _restarted_elsewhere(2, tracer=found_with)
     assert ex.merges and _whole(ex, score)
-    ex, score = _restarted_elsewhere(2, ExplorerParams(dead_end_depth=0.0), tracer=found_with)
+    then = {"cut_past": False, "past_candidates": False}
+    ex, score = _restarted_elsewhere(2, ExplorerParams(**then), tracer=found_with)
+    assert ex.merges and _whole(ex, score)
+    ex, score = _restarted_elsewhere(
+        2, ExplorerParams(dead_end_depth=0.0, **then), tracer=found_with
+    )
     assert not _whole(ex, score)
