@@ -38,8 +38,16 @@ def before_stop42(params: TracerParams) -> TracerParams:
 
 def explorer_before_stop42(params: ExplorerParams) -> ExplorerParams:
     """``params`` as up to stop 41: an excursion straight on along the edge keeps it only
-    within ``rejoin_m``, and a port left by its own bearing goes on straight as any other."""
-    return replace(params, straight_rejoin_m=0.0, own_bearing_until_sides_m=1.5)
+    within ``rejoin_m``, and a port left by its own bearing goes on straight as any other; and
+    an edge that went past a junction is not repaired (``cut_past``, ``past_candidates``: on
+    since stop 50)."""
+    return replace(
+        params,
+        straight_rejoin_m=0.0,
+        own_bearing_until_sides_m=1.5,
+        cut_past=False,
+        past_candidates=False,
+    )
 
 
 #: Stop 41's tracer, for runs a test was found with.
