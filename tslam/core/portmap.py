@@ -75,10 +75,11 @@ def merged_by_bearing(
     if len(now_rad) != n - 1 or n < 3:
         return None
     order = sorted(range(n), key=lambda i: then_rad[i] % TAU)
+    nearest = [min(range(n - 1), key=lambda m: _angdiff(now_rad[m], b)) for b in then_rad]
     found = []
     for k in range(n):
         lo, hi = order[k], order[(k + 1) % n]
-        index = [min(range(n - 1), key=lambda m: _angdiff(now_rad[m], b)) for b in then_rad]
+        index = list(nearest)
         alone = [i for i in range(n) if i not in (lo, hi)]
         if any(_angdiff(now_rad[index[i]], then_rad[i]) > tol_rad for i in alone):
             continue
