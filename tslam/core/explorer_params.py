@@ -123,6 +123,14 @@ class ExplorerParams:
     # robot has gone where it cannot be tested, and "a new place" explains as much. This is
     # the paper's candidate sets, each holding only what adjoins the previous set.
     silent_life: int = 2
+    # A fragment grown to this many nodes with its hypotheses still apart is given up on:
+    # the moves made have not separated them, so the map records the ambiguity and stops
+    # unrolling the building behind the look-alikes (``Resolving._resolve``). fig15 seed 5
+    # at drift paper grew one fragment to 78 nodes in 3000 s, always with a move that
+    # split its hypotheses by the nodes they predicted, never by what the robot would see
+    # there, and reported no ambiguity. Over fig1, 12, 13, 14, 16, seeds 1-12 at drift
+    # paper, no complete run merged a fragment of more than 11 nodes (0: no bound).
+    fragment_max: int = 30
     # A meet point found partway along a known edge its first tracing passed without homing
     # (the third obstacle silent just then, as at a room's corner): placed on that pass by
     # dead reckoning, trusted only while the robot has travelled this little since ...

@@ -140,7 +140,12 @@ class Resolving(ExplorerState):
             if separating_port(self.map, tests_it, node) is not None:
                 return {}
             return self._merge(tested[0])
-        if node in self.hyps.fragment and self._separating_port(node) is not None:
+        if len(tested) > 1 and 0 < self.p.fragment_max <= len(self.hyps.fragment):
+            self._note(
+                f"node {node}: {len(self.hyps.fragment)} nodes mapped since the hypotheses "
+                f"began and no move has told {len(tested)} placements apart"
+            )
+        elif node in self.hyps.fragment and self._separating_port(node) is not None:
             return {}
         if len(tested) == 1:
             # Not proven, and nothing to test from here: keep it open for a later edge to
