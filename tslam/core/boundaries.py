@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import math
 
-from tslam.core.explorer_state import ExplorerState
-from tslam.core.localize import Tolerances, predict
+from tslam.core.explorer_state import MAX_CUTS, ExplorerState
+from tslam.core.localize import Hypothesis, Prediction, Tolerances, predict
 from tslam.core.tracer import BoundaryReached
 
 
@@ -120,6 +120,7 @@ class Boundaries(ExplorerState):
     ) -> None:
         survivors = []
         confirmed = []
+        past = []
         for h in self.hyps.live:
             pred = predict(self.map, h, f, j)
             if pred is None or self.unsure_departure:
@@ -129,13 +130,20 @@ class Boundaries(ExplorerState):
             ):
                 survivors.append(h)
                 confirmed.append((h, pred.node))
+            elif (beyond := self._past_to_dead_end(h, pred, ev, length)) is not None:
+                survivors.append(h)
+                past.append((h, beyond))
         b = self._add_boundary(ev)
-        self.map.connect(f, j, b, 0, 0.0 if length is None else length)
+        edge = self.map.connect(f, j, b, 0, 0.0 if length is None else length)
         for h, w in confirmed:
             h.mapping[b] = (w, 0)
             h.dead_ends += 1
+        for h, w in past:
+            h.mapping[b] = (w, 0)
+            h.cuts.add(edge)
         refuted = len(self.hyps.live) - len(survivors)
-        survivors = self._age(survivors, {id(h) for h, _ in confirmed})
+        spoke = {id(h) for h, _ in confirmed} | {id(h) for h, _ in past}
+        survivors = self._age(survivors, spoke)
         if refuted:
             # Said, as at a meet point: a hypothesis that vanished at a dead end unnoted left
             # a progress log of look-alikes none of which was ever refuted.
@@ -148,3 +156,32 @@ class Boundaries(ExplorerState):
         else:
             self.hyps.clear()
         self._leave(b, 0)
+
+    def _past_to_dead_end(
+        self, h: Hypothesis, pred: Prediction, ev: BoundaryReached, length: float | None
+    ) -> int | None:
+        """The dead end beyond the meet point ``h`` predicted, if the robot went past that
+        junction without homing and on to it: the one boundary, off another of its ports,
+        that the two edges' length reaches (as ``Arrival._past_a_junction`` finds a meet
+        point beyond). fig13 seed 2 went east from meet point 7 past meet point 8 unhomed, to
+        its dead end 3.4 m on; the true hypothesis, which said meet point 8 at 2.0 m, was
+        refuted there, and the building was mapped again. None if there is no such dead end,
+        or more than one, or ``h`` already says ``MAX_CUTS`` edges went past a junction."""
+        if not (self.p.cut_past and self.p.past_to_dead_end) or length is None:
+            return None
+        if pred.kind != "meet" or len(h.cuts) >= MAX_CUTS or pred.node in self.stored:
+            return None
+        tol = self._tol()
+        if length <= pred.length_m + tol.length_abs_m + tol.length_rel * pred.length_m:
+            return None
+        beyond = []
+        for p, e in enumerate(self.map.node(pred.node).ports):
+            if e is None or p == pred.arrival_port:
+                continue
+            edge = self.map.edge(e)
+            b, _ = edge.other_end(pred.node, p)
+            if self.map.node(b).kind != "boundary" or any(c == b for c, _ in h.mapping.values()):
+                continue
+            if self._dead_end_tol(ev, b).length_ok(length, pred.length_m + edge.length_m):
+                beyond.append(b)
+        return beyond[0] if len(beyond) == 1 else None

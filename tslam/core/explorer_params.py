@@ -245,6 +245,12 @@ class ExplorerParams:
     # meet point 1 unhomed, 5.6 m for 2.8, and with no candidate but two wrong look-alikes
     # mapped the building again.
     past_candidates: bool = True
+    # ... and a dead end reached past the meet point a hypothesis predicted, as far as the
+    # two edges, keeps it (``Boundaries._past_to_dead_end``).
+    past_to_dead_end: bool = True
+    # ... and a junction found on an edge a hypothesis said went past one, where it said,
+    # confirms it (``Unhomed._found_past``; False: it is dropped).
+    past_found: bool = True
     # A meet point found partway along a known edge goes into the map, even with a departure
     # straight on: placed on the edge by the recent pass if there is one, else the rest of
     # the edge is forgotten (``_junction_on_edge``). Off, as before stop 28: such a junction

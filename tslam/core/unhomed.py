@@ -10,6 +10,7 @@ from tslam.core.edgepaths import EdgePath
 from tslam.core.explorer_state import ExplorerState, angdiff, nearest
 from tslam.core.localize import Hypothesis, candidates
 from tslam.core.portmap import PortMap, match_by_angle
+from tslam.core.signature import rotations
 from tslam.core.tracer import BoundaryReached, MeetPointReached
 from tslam.core.walkon import Walk, walk_back, walk_on
 
@@ -134,10 +135,16 @@ class Unhomed(ExplorerState):
         )
         return self._new_edge(ev, self._seen(ev, a, f), f, j, length)
 
-    def _drop_placing_both(self, f: int, w: int) -> int:
+    def _drop_placing_both(self, f: int, w: int, keep: list[Hypothesis] | None = None) -> int:
         """Drop the hypotheses that placed both ends of an edge found to hold a junction:
-        they placed the edge as one, which it is not. Returns how many went."""
-        kept = [h for h in self.hyps.live if not (f in h.mapping and w in h.mapping)]
+        they placed the edge as one, which it is not (but those in ``keep``). Returns how
+        many went."""
+        spared = {id(h) for h in keep or ()}
+        kept = [
+            h
+            for h in self.hyps.live
+            if id(h) in spared or not (f in h.mapping and w in h.mapping)
+        ]
         dropped = len(self.hyps.live) - len(kept)
         self.hyps.live = kept
         return dropped
@@ -160,16 +167,19 @@ class Unhomed(ExplorerState):
             f"node {node} found {length:.2f} m along edge {e} ({f}-{w}), a junction its first "
             f"tracing went by: split into edges {near_e} and {far_e}"
         )
-        dropped = self._drop_placing_both(f, w)
+        kept = self._found_past(e, f, j, node, a, length) if self.p.past_found else []
+        found = len(kept)
+        dropped = self._drop_placing_both(f, w, kept)
         # It may be a junction already mapped from another side; both its known ports must
         # then be unexplored there.
         deg = ev.degree
+        implied = {h.mapping[node] for h in self.hyps.live if node in h.mapping}
         fresh = [
             (c, k)
             for c, k in candidates(
                 self.map, self.map.signature(node), self._tol(), self.hyps.fragment | {node}, a
             )
-            if self.map.node(c).ports[(far + k) % deg] is None
+            if self.map.node(c).ports[(far + k) % deg] is None and (c, k) not in implied
         ]
         crowd = self._crowd(node, fresh)
         for c, k in fresh:
@@ -178,13 +188,54 @@ class Unhomed(ExplorerState):
             self.hyps.fragment.add(node)
         else:
             self.hyps.clear()
-        if fresh or dropped:
+        if fresh or dropped or found:
             self._note(
-                f"node {node}: {len(fresh)} look-alike(s), {dropped} hypothesis(es) dropped, "
-                f"{len(self.hyps.live)} open"
+                f"node {node}: {len(fresh)} look-alike(s), "
+                + (f"{found} found the junction their edge went past, " if found else "")
+                + f"{dropped} hypothesis(es) dropped, {len(self.hyps.live)} open"
             )
         self.partial_m = 0.0
         return node, 0
+
+    def _found_past(
+        self, e: int, f: int, j: int, node: int, a: int, length: float
+    ) -> list[Hypothesis]:
+        """The hypotheses that said edge ``e`` went past a junction, that junction found
+        where they put it: ``node``, just split into ``e`` from ``f`` by its port ``a``, is
+        the junction ``f``'s image leads to by the image of ``j``, as far as ``length``. Each
+        maps ``node`` there, drops the cut, and counts a confirmation (a junction found
+        where, and as, predicted). Before, they placed both ends of an edge that is no more,
+        and were dropped with those that placed it as one (fig13 seed 2: past meet point 8
+        to its dead end, the true hypothesis kept by the two edges' length, then dropped when
+        the robot, back from the dead end, homed at the junction). Returns them."""
+        seen = self.map.signature(node)
+        tol = self._tol()
+        found = []
+        for h in self.hyps.live:
+            img = h.image_port(self.map, f, j) if e in h.cuts else None
+            if img is None or node in h.mapping:
+                continue
+            e1 = self.map.node(img[0]).ports[img[1]]
+            if e1 is None:
+                continue
+            old = self.map.edge(e1)
+            c, q = old.other_end(img[0], img[1])
+            cn = self.map.node(c)
+            if cn.kind != "meet" or cn.degree != seen.degree or c in h.mapping or any(
+                x == c for x, _ in h.mapping.values()
+            ):
+                continue
+            if not tol.length_ok(length, old.length_m):
+                continue
+            k = (q - a) % cn.degree
+            if k not in rotations(seen, self.map.signature(c), tol.clearance_m, tol.angle_rad):
+                continue
+            h.mapping[node] = (c, k)
+            h.cuts.discard(e)
+            h.confirmed += 1
+            h.silent_arrivals = 0
+            found.append(h)
+        return found
 
     def _read_where_left(self, ev: MeetPointReached, w: int, q: int) -> PortMap | None:
         """The port map of ``w``, read with another degree where the robot left it for a dead
