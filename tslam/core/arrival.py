@@ -473,10 +473,23 @@ class Arrival(ExplorerState):
         survivors: list[Hypothesis] = []
         confirmed: list[tuple[Hypothesis, int, int]] = []
         past: list[tuple[Hypothesis, tuple[int, int] | None]] = []
+        followed: list[tuple[Hypothesis, int, int]] = []
         for h in self.hyps.live:
             pred = predict(self.map, h, f, j)
             if pred is None or self.unsure_departure:
                 survivors.append(h)
+                if pred is None or not self.p.unsure_follow:
+                    continue
+                # Left by a departure of a misread node: the arrival is no evidence (it may
+                # be another look-alike as far), but where it fits, the hypothesis follows
+                # the robot there, and the edges after it test it. Else it can say nothing
+                # from here on and ages out (fig13 seed 56, at drift paper: the 0.29 m pair
+                # read with an edge merged, left east to meet point 9, found as predicted).
+                k = arrival_matches(self.map, seen, a, pred, length, tol)
+                if placed is not None and pred.node != placed.node:
+                    k = None
+                if k is not None and all(c != pred.node for c, _ in h.mapping.values()):
+                    followed.append((h, pred.node, k))
                 continue
             k = arrival_matches(self.map, seen, a, pred, length, tol)
             if placed is not None and pred.node != placed.node:
@@ -509,6 +522,8 @@ class Arrival(ExplorerState):
             h.mapping[node] = (w, k)
             if placed is None:  # a reading taken as the place predicted is no evidence
                 h.confirmed += 1
+        for h, w, k in followed:
+            h.mapping[node] = (w, k)
         for h, went in past:
             if went is None:  # the old edge went past this junction
                 pred = predict(self.map, h, f, j)
@@ -518,7 +533,7 @@ class Arrival(ExplorerState):
                 h.cuts.add(edge)
                 h.mapping[node] = went
         dropped = len(self.hyps.live) - len(survivors)
-        spoke = {id(h) for h, _, _ in confirmed} | {id(h) for h, _ in past}
+        spoke = {id(h) for h, _, _ in confirmed + followed} | {id(h) for h, _ in past}
         self.hyps.live = self._age(survivors, spoke)
         if self.hyps.live:
             self.hyps.fragment.add(node)
