@@ -164,7 +164,7 @@ class Boundaries(ExplorerState):
         junction without homing and on to it: the one boundary, off another of its ports,
         that the two edges' length reaches (as ``Arrival._past_a_junction`` finds a meet
         point beyond). fig13 seed 2 went east from meet point 7 past meet point 8 unhomed, to
-        its dead end 3.4 m on; the true hypothesis, which said meet point 8 at 2.0 m, was
+        its dead end 3.2 m on; the true hypothesis, which said meet point 8 at 2.0 m, was
         refuted there, and the building was mapped again. None if there is no such dead end,
         or more than one, or ``h`` already says ``MAX_CUTS`` edges went past a junction."""
         if not (self.p.cut_past and self.p.past_to_dead_end) or length is None:
