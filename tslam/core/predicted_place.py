@@ -79,8 +79,9 @@ class PredictedPlace(ExplorerState):
         return self._read_as(ev, c, q, pm)
 
     def _as_look_alike(self, ev: MeetPointReached) -> AsPlace | None:
-        """``ev``, a new node that looks like no old one as read, read as the one old node it
-        is with one edge fewer, arrived at by a departure unexplored there: the place mapped
+        """``ev``, a new node no hypothesis confirmed, read as the one old node it is with
+        one edge fewer, arrived at by a departure unexplored there (whatever old nodes it
+        looks like as read: taking those first cost a run, README stop 51): the place mapped
         from one of its points, reached at the other by a new edge (fig14 seed 1: the lab
         door's 0.26 m pair, mapped from inside with three edges, come to from the north and
         read with four, went into the map again). Stricter than an edge's known end
