@@ -607,7 +607,7 @@ class Arrival(ExplorerState):
         if len(h.cuts) >= MAX_CUTS and pred.edge not in h.cuts:
             return None
         tol = self._tol()
-        slack = tol.length_abs_m + tol.length_rel * pred.length_m
+        slack = tol.length_slack(pred.length_m)
         if length < pred.length_m - slack:
             return Past(None)
         if length <= pred.length_m + slack + (tol.wandered_m if tol.at_least else 0.0):
@@ -653,7 +653,7 @@ class Arrival(ExplorerState):
             if e is None or e == edge or not self._heading_fits(node, c, k):
                 continue
             old = self.map.edge(e)
-            slack = tol.length_abs_m + tol.length_rel * max(length, old.length_m)
+            slack = tol.length_slack(max(length, old.length_m))
             if length < old.length_m - slack:
                 out.append((c, k, e))
             elif length > old.length_m + slack:

@@ -172,7 +172,7 @@ class Boundaries(ExplorerState):
         if pred.kind != "meet" or len(h.cuts) >= MAX_CUTS or pred.node in self.stored:
             return None
         tol = self._tol()
-        if length <= pred.length_m + tol.length_abs_m + tol.length_rel * pred.length_m:
+        if length <= pred.length_m + tol.length_slack(pred.length_m):
             return None
         beyond = []
         for p, e in enumerate(self.map.node(pred.node).ports):

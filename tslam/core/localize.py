@@ -42,10 +42,14 @@ class Tolerances:
     # a few decimetres (fig12 seed 5: 6.5 m taken for 1.3 m, and the map was wrong for good).
     wandered_m: float = math.inf
 
+    def length_slack(self, mapped: float) -> float:
+        """How far a measured length may be off one of ``mapped`` metres."""
+        return self.length_abs_m + self.length_rel * mapped
+
     def length_ok(self, measured: float | None, mapped: float) -> bool:
         if measured is None:
             return True
-        slack = self.length_abs_m + self.length_rel * mapped
+        slack = self.length_slack(mapped)
         if self.at_least:
             return mapped - slack <= measured <= mapped + slack + self.wandered_m
         return abs(measured - mapped) <= slack

@@ -434,7 +434,7 @@ class Resolving(ExplorerState):
         a, b = (view.edge(e) for e in edges)
         long, short = (a, b) if a.length_m > b.length_m else (b, a)
         tol = self._tol()
-        if long.length_m - short.length_m <= tol.length_abs_m + tol.length_rel * long.length_m:
+        if long.length_m - short.length_m <= tol.length_slack(long.length_m):
             return None
         if any(view.node(n).kind != "meet" for n in (short.u, short.v)):
             return None
