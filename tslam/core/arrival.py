@@ -476,27 +476,25 @@ class Arrival(ExplorerState):
         followed: list[tuple[Hypothesis, int, int]] = []
         for h in self.hyps.live:
             pred = predict(self.map, h, f, j)
-            if pred is None or self.unsure_departure:
+            if pred is None:
                 survivors.append(h)
-                if pred is None or not self.p.unsure_follow:
-                    continue
-                # Left by a departure of a misread node: the arrival is no evidence (it may
-                # be another look-alike as far), but where it fits, the hypothesis follows
-                # the robot there, and the edges after it test it. Else it can say nothing
-                # from here on and ages out (fig13 seed 56, at drift paper: the 0.29 m pair
-                # read with an edge merged, left east to meet point 9, found as predicted).
-                k = arrival_matches(self.map, seen, a, pred, length, tol)
-                if placed is not None and pred.node != placed.node:
-                    k = None
-                if k is not None and all(c != pred.node for c, _ in h.mapping.values()):
-                    followed.append((h, pred.node, k))
                 continue
             k = arrival_matches(self.map, seen, a, pred, length, tol)
             if placed is not None and pred.node != placed.node:
                 k = None  # it did not fit the reading as it was (``_as_predicted``)
             # Two new nodes cannot both be one old place: the fragment is a walk through
             # places the robot had not seen since it left the map.
-            if k is not None and all(c != pred.node for c, _ in h.mapping.values()):
+            fits = k is not None and all(c != pred.node for c, _ in h.mapping.values())
+            if self.unsure_departure:
+                # Left by a departure of a misread node: the arrival is no evidence (it may
+                # be another look-alike as far), but where it fits, the hypothesis follows
+                # the robot there, and the edges after it test it. Else it can say nothing
+                # from here on and ages out (fig13 seed 56, at drift paper: the 0.29 m pair
+                # read with an edge merged, left east to meet point 9, found as predicted).
+                survivors.append(h)
+                if fits and self.p.unsure_follow:
+                    followed.append((h, pred.node, k))
+            elif fits:
                 survivors.append(h)
                 confirmed.append((h, pred.node, k))
             elif k is None and self.p.cut_past:
