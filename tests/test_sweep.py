@@ -241,6 +241,25 @@ def test_one_stray_reading_between_the_faces_of_a_bent_wall_does_not_split_it():
     assert len(sweep_minima(b, d)) == 2
 
 
+def test_two_strays_at_unlike_ranges_between_a_bent_walls_faces_are_no_view():
+    """fig12 seed 76, its cut corner swept twice: 2.1 m and 5.7 m amid the faces' 1.4 m, 10
+    degrees apart, split the bend into two walls and made a meet point that is not there
+    (the building was mapped again). A doorway's readings all meet the wall beyond it, at
+    about one range: read with ``agree``, only those are a view."""
+    b, d = _bent_wall_with_an_outlier(2.8)
+    deg = np.degrees(b)
+    d[np.argmin(np.abs(deg - 0.0))] = 2.1
+    d[np.argmin(np.abs(deg - 8.4))] = 5.7
+    assert len(sweep_minima(b, d)) == 2
+    assert len(sweep_minima(b, d, agree=True)) == 1
+    d[np.argmin(np.abs(deg - 2.8))] = 2.2  # a third, as far as the first: a view
+    assert len(sweep_minima(b, d, agree=True)) == 2
+    b, d = _bent_wall_with_an_outlier(2.8)
+    view = (deg > 354) | (deg < 6)
+    d[view] = np.linspace(3.6, 3.8, np.count_nonzero(view))  # a doorway, readings agreeing
+    assert len(sweep_minima(b, d, agree=True)) == 2
+
+
 def test_one_deeper_reading_makes_the_sweep_doubtful_and_twice_the_readings_decide():
     """fig14's lab door from the junction beside it: the jambs 32 degrees apart, the view
     between them 7 degrees wide, one reading of a Nomad ring's sweep. The sweep joins them but

@@ -49,6 +49,9 @@ WIDE_BEND_MERGE_RAD = math.radians(70.0)
 #: single deeper reading makes the sweep *doubtful*, and the tracer sweeps once more.
 MIN_VIEW_READINGS = 2
 MIN_VIEW_RAD = math.radians(5.0)
+#: ... and, read with ``agree``, the readings of one view lie this close in distance,
+#: relatively: they meet the same wall beyond (a beam 25 degrees wide spreads them little).
+VIEW_AGREE_REL = 0.2
 #: Further apart than ``merge_rad``, two runs are still one bent wall up to this angle if
 #: the readings between them show a shallow bend's vertex: no deeper than this ratio, which
 #: a concave bend of about 55 degrees between normals gives (1 / cos 27.5).
@@ -130,6 +133,7 @@ class Sweep:
         shallow: bool = False,
         vertex: bool = False,
         recess: bool = False,
+        agree: bool = False,
     ) -> list[Obstacle]:
         """The obstacles seen, in the frame of a robot heading ``heading_rad``; the options
         as for ``sweep_minima``."""
@@ -144,6 +148,7 @@ class Sweep:
             shallow=shallow,
             vertex=vertex,
             recess=recess,
+            agree=agree,
         )
 
 
@@ -162,6 +167,7 @@ def sweep_minima(
     shallow: bool = False,
     vertex: bool = False,
     recess: bool = False,
+    agree: bool = False,
 ) -> list[Obstacle]:
     """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
 
@@ -181,7 +187,8 @@ def sweep_minima(
     between them show a shallow bend's vertex (``_shallow_bend``). With ``vertex`` two runs
     are not one bent wall if a reading between them lies beyond the vertex their two faces
     would make (``_bend_vertex``). With ``recess`` a plateau that borders a lower run is
-    still an obstacle if it is wide and framed by two nearer obstacles (``_recessed``).
+    still an obstacle if it is wide and framed by two nearer obstacles (``_recessed``). With
+    ``agree`` a view between two runs is deeper readings that see about as far.
 
     A sweep of more than ``DENSE_READINGS`` readings (a ring that fires fast) is read as the
     medians of ``DENSE_BINS`` sectors, with ``shallow`` on and ``recess`` off.
@@ -271,7 +278,7 @@ def sweep_minima(
         if set_back[k] or set_back[(k + 1) % m]:
             continue
         a, c = runs[k], runs[(k + 1) % m]
-        one = _one_wall(a, c, d, merge_rad, bend_ratio, shallow, vertex)
+        one = _one_wall(a, c, d, merge_rad, bend_ratio, shallow, vertex, agree)
         if one is not False:
             parent[root((k + 1) % m)] = root(k)
         if one is None and doubts is not None:
@@ -508,9 +515,11 @@ def _one_wall(
     bend_ratio: float,
     shallow: bool = False,
     vertex: bool = False,
+    agree: bool = False,
 ) -> bool | None:
     """``c`` follows ``a`` counter-clockwise; could the two be one bent wall? None: yes, but
-    a view between them too narrow to count was seen (a stray echo, or a narrow doorway)."""
+    a view between them too narrow to count was seen (a stray echo, or a narrow doorway).
+    With ``agree`` the deeper readings of a view see about as far."""
     sep = (c[1] - a[1]) % (2 * math.pi)
     if sep >= (BENT_WALL_MAX_RAD if shallow else merge_rad):
         return False
@@ -526,11 +535,26 @@ def _one_wall(
     # A view past the bend is some degrees wide; one stray reading is not (an outlier, and a
     # ring that fires fast sweeps hundreds of readings, outliers among them). Each reading
     # stands for the sweep's mean spacing: two deeper readings separate on a slow ring.
-    deep = 0
+    # With ``agree``, only if they see about as far (a doorway's readings all meet the next
+    # room's wall): fig12 seed 76 read 2.1 m and 5.7 m amid its cut corner's 1.4 m, and the
+    # corner's two faces made a meet point that is not there.
+    deep: list[float] = []
     while k != end:
         if math.isfinite(d[k]) and d[k] > limit:
-            deep += 1
-            if deep >= MIN_VIEW_READINGS and deep * 2 * math.pi / n >= MIN_VIEW_RAD:
-                return False
+            deep.append(float(d[k]))
         k = (k + 1) % n
-    return True if deep == 0 else None
+    view = _agreeing(deep) if agree else len(deep)
+    if view >= MIN_VIEW_READINGS and view * 2 * math.pi / n >= MIN_VIEW_RAD:
+        return False
+    return True if not deep else None
+
+
+def _agreeing(distances: list[float]) -> int:
+    """The most of ``distances`` that lie within ``VIEW_AGREE_REL`` of one another."""
+    v = sorted(distances)
+    best, lo = 0, 0
+    for hi, x in enumerate(v):
+        while x > v[lo] * (1.0 + VIEW_AGREE_REL):
+            lo += 1
+        best = max(best, hi - lo + 1)
+    return best

@@ -161,6 +161,9 @@ class TracerParams:
     # stop 35's dead-end reads (explorer.py) removed the false merge that kept it off. Over
     # issue 3's 30 traces it meets the edge-length target in 25 against 23 (README, stop 36).
     sweep_recess: bool = True
+    # ``agree``: a view between two runs of a sweep is deeper readings that see about as far;
+    # strays at any ranges are no view (sweep.py).
+    sweep_view_agree: bool = True
     place_corners: bool = True
     sensing: SensingParams = field(default_factory=SensingParams)
     boundary_clearance_m: float = 0.45  # the edge has run into its corner ...
@@ -778,6 +781,7 @@ class Tracer:
             shallow=p.sweep_shallow_bend,
             vertex=p.sweep_vertex,
             recess=p.sweep_recess,
+            agree=p.sweep_view_agree,
         )
         if doubts and p.sweep_again and not s.swept_again:
             # One deeper reading between two walls: a stray echo, or a doorway too narrow
