@@ -191,7 +191,7 @@ def sweep_minima(
     ``agree`` a view between two runs is deeper readings that see about as far.
 
     A sweep of more than ``DENSE_READINGS`` readings (a ring that fires fast) is read as the
-    medians of ``DENSE_BINS`` sectors, with ``shallow`` on and ``recess`` off.
+    medians of ``DENSE_BINS`` sectors, with ``shallow`` on and ``recess`` and ``agree`` off.
     """
     n = len(bearing_rad)
     if n < 3:
@@ -217,6 +217,9 @@ def sweep_minima(
         # fig16's indent more often (at drift paper, 4 ms a firing: seeds 1-8 complete 0
         # times with it, 2 without).
         recess = False
+        # A sector's median is no stray already; with ``agree`` on these, fig12 seed 1 at
+        # 4 ms a firing, without drift, mapped a fourth meet point.
+        agree = False
     claimed = np.full(n, -1)
     # Each reading stands for the sweep's mean spacing: a slow ring's few readings each cover
     # degrees, a fast ring's many a fraction of one.
