@@ -15,7 +15,7 @@ from sim_backend.builtin_worlds import builtin_world
 from sim_backend.ground_truth import compute_gvg
 from sim_backend.world import PolygonWorld, StartPose
 from tests.tracer_paths import GIVING_UP
-from tslam.core.sweep import WIDE_BEND_MERGE_RAD, Sweep, sweep_minima
+from tslam.core.sweep import DENSE_BINS, WIDE_BEND_MERGE_RAD, Sweep, sweep_minima
 from tslam.core.tracer import MeetPointReached, Tracer, TracerParams
 from tslam.programs.trace_cmd import run_trace
 
@@ -258,6 +258,27 @@ def test_two_strays_at_unlike_ranges_between_a_bent_walls_faces_are_no_view():
     view = (deg > 354) | (deg < 6)
     d[view] = np.linspace(3.6, 3.8, np.count_nonzero(view))  # a doorway, readings agreeing
     assert len(sweep_minima(b, d, agree=True)) == 2
+
+
+def test_a_fast_rings_sector_medians_keep_every_deeper_reading_a_view():
+    """A view down a corridor meets walls at many ranges, one per sector of a fast ring's
+    sweep: there ``agree`` is off, and the bend's faces stay two obstacles (fig12 seed 1 at
+    4 ms a firing mapped a fourth meet point with it on). A slow ring's few such readings
+    are strays, and the faces one wall."""
+    for b in (_fine_ring(), _ring(2.8)):
+        # In the sweep's sectors as ``_binned`` cuts them: the faces over seven each, seven
+        # between them, each 50 % further than the one before (no two within 20 %); on a
+        # slow ring each reading is its own.
+        cell = np.floor(np.degrees(b) * DENSE_BINS / 360.0).astype(int)
+        d = np.full(len(b), np.inf)
+        d[(cell >= 118) & (cell <= 124)] = 1.40
+        d[(cell >= 4) & (cell <= 10)] = 1.42
+        gap = (cell >= 125) | (cell <= 3)
+        along = (cell[gap] - 125) % DENSE_BINS if len(b) > 256 else (np.degrees(b[gap]) + 10) % 360
+        _, rank = np.unique(along, return_inverse=True)
+        d[gap] = 2.0 * 1.5**rank
+        assert len(sweep_minima(b, d)) == 2
+        assert len(sweep_minima(b, d, agree=True)) == (2 if len(b) > 256 else 1)
 
 
 def test_one_deeper_reading_makes_the_sweep_doubtful_and_twice_the_readings_decide():
