@@ -400,6 +400,22 @@ def test_one_stray_reading_between_a_shallow_bends_faces_is_a_doubt_not_a_view()
     assert len(sweep_minima(b, d, shallow=True)) == 2
 
 
+def test_two_strays_at_unlike_ranges_between_a_shallow_bends_faces_are_no_view():
+    """fig12 seed 29 swept its cut corner from 1.4 m and read 1.64 m and 4.86 m among the
+    readings of the bend's vertex: two deeper readings, so a view, and the faces two walls
+    with a meet point between them that is not there (the room was mapped again). Read with
+    ``agree`` they are strays; two readings that see as far are still a view."""
+    b, deg, d = _cut_corner()
+    between = np.flatnonzero((deg > 205) & (deg < 230))
+    d[between] = 1.58  # the vertex over five readings, the faces' middles 66 degrees apart
+    assert len(between) == 5 and len(sweep_minima(b, d, shallow=True)) == 1
+    d[between[[1, 3]]] = [1.74, 4.86]
+    assert len(sweep_minima(b, d, shallow=True)) == 2
+    assert len(sweep_minima(b, d, shallow=True, agree=True)) == 1
+    d[between[[1, 3]]] = [3.25, 3.3]
+    assert len(sweep_minima(b, d, shallow=True, agree=True)) == 2
+
+
 def test_a_wall_cut_into_pieces_by_dropouts_is_one_obstacle_when_joined():
     """fig13's meet point 5, swept 2 cm off it: one wall answered at 72, 77 and 83 degrees
     with no echo at 80, so its pieces held two readings and one, too short to count; with

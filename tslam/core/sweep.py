@@ -492,7 +492,9 @@ def _bend_vertex(
     return r + tol_m + tol_rel * r
 
 
-def _shallow_bend(d: np.ndarray, k: int, end: int, far: float) -> bool | None:
+def _shallow_bend(
+    d: np.ndarray, k: int, end: int, far: float, agree: bool = False
+) -> bool | None:
     """Whether the readings from ``k`` up to ``end`` show the vertex of a shallow concave
     bend between two faces at most ``far`` away: echoes all the way, none deeper than a bend
     of some 55 degrees would give. Each face answers only on its own side of the bend, so
@@ -500,12 +502,15 @@ def _shallow_bend(d: np.ndarray, k: int, end: int, far: float) -> bool | None:
     corner read 62 and 71 degrees apart once dropouts no longer cut one face out (``silent``).
     A square corner's vertex is 1.41 times as far as its walls, and between two obstacles
     of a meet point the view goes past them. One deeper reading among them is a stray echo
-    or a view too narrow to count, as for a bend within ``merge_rad`` (None: doubtful)."""
+    or a view too narrow to count, as for a bend within ``merge_rad`` (None: doubtful); with
+    ``agree``, so are several that do not see about as far as one another."""
     n = len(d)
     between = d[[(k + j) % n for j in range((end - k) % n)]]
     seen = between[np.isfinite(between)]
-    deep = int(np.count_nonzero(seen > SHALLOW_BEND_RATIO * far))
-    if len(seen) - deep < MIN_VIEW_READINGS or deep >= MIN_VIEW_READINGS:
+    deeper = seen[seen > SHALLOW_BEND_RATIO * far]
+    deep = len(deeper)
+    view = _agreeing([float(x) for x in deeper]) if agree else deep
+    if len(seen) - deep < MIN_VIEW_READINGS or view >= MIN_VIEW_READINGS:
         return False
     return True if deep == 0 else None
 
@@ -531,7 +536,7 @@ def _one_wall(
     n = len(d)
     k, end = (a[3] + 1) % n, c[2]
     if sep >= merge_rad:
-        return _shallow_bend(d, k, end, max(a[0], c[0]))
+        return _shallow_bend(d, k, end, max(a[0], c[0]), agree)
     limit = bend_ratio * max(a[0], c[0])
     if vertex:
         limit = min(limit, _bend_vertex(a[0], c[0], sep))
