@@ -261,10 +261,10 @@ def test_two_strays_at_unlike_ranges_between_a_bent_walls_faces_are_no_view():
 
 
 def test_a_fast_rings_sector_medians_keep_every_deeper_reading_a_view():
-    """A view down a corridor meets walls at many ranges, one per sector of a fast ring's
-    sweep: there ``agree`` is off, and the bend's faces stay two obstacles (fig12 seed 1 at
-    4 ms a firing mapped a fourth meet point with it on). A slow ring's few such readings
-    are strays, and the faces one wall."""
+    """A fast ring's sweep is read as sector medians, which are no strays: ``agree`` is off
+    there, and deeper readings at unlike ranges between a bend's faces keep them two
+    obstacles as before (fig12 seed 1 at 4 ms a firing mapped a fourth meet point with it
+    on). On a slow ring the same readings are strays, and the faces one wall."""
     for b in (_fine_ring(), _ring(2.8)):
         # In the sweep's sectors as ``_binned`` cuts them: the faces over seven each, seven
         # between them, each 50 % further than the one before (no two within 20 %); on a

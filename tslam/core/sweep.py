@@ -50,7 +50,7 @@ WIDE_BEND_MERGE_RAD = math.radians(70.0)
 MIN_VIEW_READINGS = 2
 MIN_VIEW_RAD = math.radians(5.0)
 #: ... and, read with ``agree``, the readings of one view lie this close in distance,
-#: relatively: they meet the same wall beyond (a beam 25 degrees wide spreads them little).
+#: relatively: they meet the same wall beyond.
 VIEW_AGREE_REL = 0.2
 #: Further apart than ``merge_rad``, two runs are still one bent wall up to this angle if
 #: the readings between them show a shallow bend's vertex: no deeper than this ratio, which
