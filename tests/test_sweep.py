@@ -15,6 +15,7 @@ from sim_backend.builtin_worlds import builtin_world
 from sim_backend.ground_truth import compute_gvg
 from sim_backend.world import PolygonWorld, StartPose
 from tests.tracer_paths import GIVING_UP
+from tslam.core import sweep as sweep_module
 from tslam.core.sweep import DENSE_BINS, WIDE_BEND_MERGE_RAD, Sweep, sweep_minima
 from tslam.core.tracer import MeetPointReached, Tracer, TracerParams
 from tslam.programs.trace_cmd import run_trace
@@ -582,3 +583,75 @@ def test_no_meet_point_beside_something_too_near_to_measure():
     report = run_trace(backend, 12).report
     assert report["meet_point_error_max_m"] <= 0.10
     assert report["collisions"] == 0
+
+
+def _captured(text: str) -> tuple[np.ndarray, np.ndarray]:
+    """A sweep as the simulated robot recorded it: ``bearing:distance`` pairs, degrees and
+    metres, ``inf`` for no echo."""
+    pairs = [p.split(":") for p in text.split()]
+    return np.radians([float(b) for b, _ in pairs]), np.array([float(d) for _, d in pairs])
+
+
+# fig13 seed 8 at 50 s, homed onto the junction at (5.57, 1.55): the wall the robot stands
+# 1.55 m off (321-11 degrees), the corner where the cabinet meets it (2.04-2.12 m), and the
+# cabinet's own corner (1.69-1.74 m), 56 degrees from the wall's middle.
+_FIG13_JUNCTION = """
+0:inf 6:1.59 11:1.56 17:inf 22:2.12 28:2.04 33:1.74 38:1.69 44:1.71 50:1.71 55:3.65 60:3.52
+66:inf 71:4.85 77:4.87 82:2.84 88:2.88 93:2.86 98:2.87 104:1.52 109:1.54 115:1.52 120:1.54
+126:inf 131:inf 137:3.63 142:3.60 148:3.71 153:3.69 159:5.30 164:3.07 166:3.04 171:2.99
+177:1.55 182:1.57 187:1.62 193:1.59 198:inf 204:inf 211:inf 217:3.03 222:2.99 228:2.99
+234:3.02 240:inf 245:5.63 251:5.53 258:5.56 263:5.47 269:5.69 274:5.88 281:5.87 286:inf
+292:inf 297:inf 304:inf 310:inf 315:inf 321:1.58 327:inf 333:1.59 338:1.58 344:1.58
+349:1.55 355:1.58
+"""
+
+# fig12 seed 29 at 417 s, swept twice at the room's cut corner: two runs 1.38 m off whose
+# middles lie 22 degrees apart, and between them four readings of the bend's vertex,
+# 1.49-1.52 m.
+_FIG12_CUT_CORNER = """
+1:3.87 5:3.86 6:3.84 11:3.87 12:3.92 17:3.79 17:3.96 23:3.89 24:3.82 28:6.32 29:6.25 34:6.32
+35:6.29 39:6.23 40:6.34 46:6.34 46:6.43 51:6.51 51:6.29 57:inf 57:inf 59:inf 62:inf 68:inf
+68:inf 73:inf 74:inf 79:inf 79:inf 79:inf 84:inf 89:inf 90:inf 95:inf 95:inf 99:1.40
+101:inf 101:inf 106:1.42 111:1.41 112:1.36 117:1.38 117:1.39 122:1.64 123:inf 128:1.35
+133:1.38 133:1.41 139:1.50 139:inf 144:1.51 145:1.49 150:1.52 150:1.38 155:1.38 155:1.32
+160:4.86 161:1.37 166:1.39 166:1.41 172:inf 172:1.38 177:1.35 177:1.40 182:1.43 183:1.37
+188:1.40 188:inf 193:1.39 194:inf 198:1.74 199:1.74 204:1.82 204:1.77 210:1.78 210:1.74
+215:1.77 215:1.73 221:1.75 222:1.74 226:1.81 228:inf 232:inf 233:inf 237:1.82 239:1.77
+243:inf 244:inf 249:inf 250:inf 255:inf 255:inf 260:inf 261:inf 266:inf 268:inf 272:inf
+273:inf 277:inf 277:inf 279:inf 283:inf 284:inf 290:6.63 291:6.65 295:6.69 296:6.55
+301:6.52 302:6.69 302:6.51 307:6.64 308:6.60 313:6.57 314:6.58 319:1.47 320:1.47 324:1.47
+325:1.43 328:1.41 330:1.48 331:1.45 336:1.45 337:1.46 342:inf 343:inf 347:inf 348:inf
+353:inf 354:inf 359:inf
+"""
+
+
+def _sweep_as_the_tracer_reads_it(text: str, vertex: bool) -> list:
+    b, d = _captured(text)
+    return sweep_minima(
+        b, d, silent=True, shallow=True, vertex=vertex, recess=True, agree=True
+    )
+
+
+def test_a_cabinets_corner_beyond_the_vertex_it_would_make_with_the_wall_is_an_obstacle():
+    """Joined with the wall as one bent wall (the corner's 1.71 m is within 1.25 times the
+    wall's 1.55 m), the cabinet's corner hid the junction 0.29 m on: its dead end was never
+    mapped. The readings between reach 2.04-2.12 m, beyond the 1.86 m vertex a wall and a
+    face there would make."""
+    joined = _sweep_as_the_tracer_reads_it(_FIG13_JUNCTION, vertex=False)
+    assert 42 not in _bearings(joined)
+    apart = _sweep_as_the_tracer_reads_it(_FIG13_JUNCTION, vertex=True)
+    near = [o for o in apart if o.distance_m < 2.0]
+    assert _bearings(near) == [42, 112, 185, 344]
+    assert [round(o.distance_m, 2) for o in near] == [1.53, 1.58, 1.58, 1.71]
+
+
+def test_readings_within_a_shallow_bends_vertex_keep_a_cut_corner_one_wall(monkeypatch):
+    """Run middles 22 degrees apart put the vertex of faces 1.38 m off at 1.41 m, and the
+    cut corner's own vertex (1.49-1.52 m) beyond it: two walls and a meet point mid-room.
+    No bend of up to 55 degrees has its vertex deeper than 1.12 times its faces (1.55 m)."""
+    obs = _sweep_as_the_tracer_reads_it(_FIG12_CUT_CORNER, vertex=True)
+    assert len([o for o in obs if o.distance_m < 1.5]) == 2
+    # Without that floor under the vertex, the faces were two walls.
+    monkeypatch.setattr(sweep_module, "SHALLOW_BEND_RATIO", 1.0)
+    obs = _sweep_as_the_tracer_reads_it(_FIG12_CUT_CORNER, vertex=True)
+    assert len([o for o in obs if o.distance_m < 1.5]) == 3

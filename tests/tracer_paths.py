@@ -81,8 +81,9 @@ GIVING_UP = giving_up(TracerParams())
 #: ended wherever a wall comes within 0.45 m, one sweep at every meet point judged where the
 #: robot stands, and an edge's length taken over its whole chain (stop 31 judges the sweep
 #: at its estimate and drops the chain's spikes: edgelength.py), its sweep reading no recess
-#: and its places no meet point of three corners (on since stop 36), and homing giving up when
-#: the third echo drops out (``hold_on``, on since stop 37).
+#: and its places no meet point of three corners (on since stop 36), homing giving up when
+#: the third echo drops out (``hold_on``, on since stop 37), and a sweep's bent walls not held
+#: to their vertex (``sweep_vertex``, on since stop 53).
 STOP25 = giving_up(
     TracerParams(
         depart_until_sides_m=0.0,
@@ -93,5 +94,6 @@ STOP25 = giving_up(
         spread_at_estimate=False,
         sweep_recess=False,
         place_corners=False,
+        sweep_vertex=False,
     )
 )

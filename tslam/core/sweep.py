@@ -539,7 +539,13 @@ def _one_wall(
         return _shallow_bend(d, k, end, max(a[0], c[0]), agree)
     limit = bend_ratio * max(a[0], c[0])
     if vertex:
-        limit = min(limit, _bend_vertex(a[0], c[0], sep))
+        # Never nearer than a shallow bend's vertex (``SHALLOW_BEND_RATIO``): the middles of
+        # two runs can lie closer in bearing than the faces' normals. fig12's cut corner
+        # (seed 29 at 417 s) read two runs 1.38 m off 22 degrees apart, a vertex of 1.41 m,
+        # and four readings of 1.49-1.52 m between them made its faces two walls and a meet
+        # point that is not there.
+        far = max(a[0], c[0])
+        limit = min(limit, max(_bend_vertex(a[0], c[0], sep), SHALLOW_BEND_RATIO * far))
     # A view past the bend is some degrees wide; one stray reading is not (an outlier, and a
     # ring that fires fast sweeps hundreds of readings, outliers among them). Each reading
     # stands for the sweep's mean spacing: two deeper readings separate on a slow ring.

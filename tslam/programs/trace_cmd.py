@@ -64,7 +64,7 @@ _SETS: dict[str, dict[str, bool | float]] = {
     "hold_on": {"home_hold_m": 0.6, "sweep_join_pieces": True, "sweep_shallow_bend": True},
     "coast": {"off_edge_coast_s": 1.0},
     "keep": {"home_keep_m": 0.1},
-    "vertex": {"sweep_vertex": True},
+    "vertex": {"sweep_vertex": True},  # on by default since stop 53
     "jump": {"swing_jump_m": 0.15},  # on by default since stop 49
     "recess": {"sweep_recess": True, "place_corners": True},  # on by default since stop 36
     "contact_memory": {"contact_hold_s": 60.0},
