@@ -185,10 +185,11 @@ def sweep_minima(
     bearing of that view to ``doubts``: more readings there would tell a stray echo from a
     doorway. With ``shallow`` two runs up to 90 degrees apart are one wall if the readings
     between them show a shallow bend's vertex (``_shallow_bend``). With ``vertex`` two runs
-    are not one bent wall if a reading between them lies beyond the vertex their two faces
-    would make (``_bend_vertex``). With ``recess`` a plateau that borders a lower run is
-    still an obstacle if it is wide and framed by two nearer obstacles (``_recessed``). With
-    ``agree`` a view between two runs is deeper readings that see about as far.
+    are not one bent wall if readings between them lie beyond the vertex their two faces
+    would make (``_bend_vertex``) and a shallow bend's (``SHALLOW_BEND_RATIO``). With
+    ``recess`` a plateau that borders a lower run is still an obstacle if it is wide and
+    framed by two nearer obstacles (``_recessed``). With ``agree`` a view between two runs
+    is deeper readings that see about as far.
 
     A sweep of more than ``DENSE_READINGS`` readings (a ring that fires fast) is read as the
     medians of ``DENSE_BINS`` sectors, with ``shallow`` on and ``recess`` and ``agree`` off.
