@@ -594,7 +594,7 @@ def _captured(text: str) -> tuple[np.ndarray, np.ndarray]:
 
 # fig13 seed 8 at 50 s, homed onto the junction at (5.57, 1.55): the wall the robot stands
 # 1.55 m off (321-11 degrees), the corner where the cabinet meets it (2.04-2.12 m), and the
-# cabinet's own corner (1.69-1.74 m), 56 degrees from the wall's middle.
+# cabinet's own corner (1.69-1.74 m), 58 degrees from the wall's middle.
 _FIG13_JUNCTION = """
 0:inf 6:1.59 11:1.56 17:inf 22:2.12 28:2.04 33:1.74 38:1.69 44:1.71 50:1.71 55:3.65 60:3.52
 66:inf 71:4.85 77:4.87 82:2.84 88:2.88 93:2.86 98:2.87 104:1.52 109:1.54 115:1.52 120:1.54
@@ -634,8 +634,8 @@ def _sweep_as_the_tracer_reads_it(text: str, vertex: bool) -> list:
 
 def test_a_cabinets_corner_beyond_the_vertex_it_would_make_with_the_wall_is_an_obstacle():
     """Joined with the wall as one bent wall (the corner's 1.71 m is within 1.25 times the
-    wall's 1.55 m), the cabinet's corner hid the junction 0.29 m on: its dead end was never
-    mapped. The readings between reach 2.04-2.12 m, beyond the 1.86 m vertex a wall and a
+    wall's 1.58 m), the cabinet's corner hid the junction 0.29 m on: its dead end was never
+    mapped. The readings between reach 2.04-2.12 m, beyond the 1.89 m vertex a wall and a
     face there would make."""
     joined = _sweep_as_the_tracer_reads_it(_FIG13_JUNCTION, vertex=False)
     assert 42 not in _bearings(joined)
