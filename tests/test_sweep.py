@@ -593,7 +593,7 @@ def _captured(text: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 # fig13 seed 8 at 50 s, homed onto the junction at (5.57, 1.55): the wall the robot stands
-# 1.55 m off (321-11 degrees), the corner where the cabinet meets it (2.04-2.12 m), and the
+# 1.58 m off (321-11 degrees), the corner where the cabinet meets it (2.04-2.12 m), and the
 # cabinet's own corner (1.69-1.74 m), 58 degrees from the wall's middle.
 _FIG13_JUNCTION = """
 0:inf 6:1.59 11:1.56 17:inf 22:2.12 28:2.04 33:1.74 38:1.69 44:1.71 50:1.71 55:3.65 60:3.52
@@ -643,6 +643,7 @@ def test_a_cabinets_corner_beyond_the_vertex_it_would_make_with_the_wall_is_an_o
     near = [o for o in apart if o.distance_m < 2.0]
     assert _bearings(near) == [42, 112, 185, 344]
     assert [round(o.distance_m, 2) for o in near] == [1.53, 1.58, 1.58, 1.71]
+    assert TracerParams().sweep_vertex  # as the tracer sweeps by default since stop 53
 
 
 def test_readings_within_a_shallow_bends_vertex_keep_a_cut_corner_one_wall(monkeypatch):
