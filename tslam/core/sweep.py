@@ -508,10 +508,9 @@ def _shallow_bend(
     n = len(d)
     between = d[[(k + j) % n for j in range((end - k) % n)]]
     seen = between[np.isfinite(between)]
-    deeper = seen[seen > SHALLOW_BEND_RATIO * far]
+    deeper = [float(x) for x in seen[seen > SHALLOW_BEND_RATIO * far]]
     deep = len(deeper)
-    view = _agreeing([float(x) for x in deeper]) if agree else deep
-    if len(seen) - deep < MIN_VIEW_READINGS or view >= MIN_VIEW_READINGS:
+    if len(seen) - deep < MIN_VIEW_READINGS or _view(deeper, agree) >= MIN_VIEW_READINGS:
         return False
     return True if deep == 0 else None
 
@@ -536,16 +535,16 @@ def _one_wall(
         return False  # a flat bend's two faces are about equally far
     n = len(d)
     k, end = (a[3] + 1) % n, c[2]
+    far = max(a[0], c[0])
     if sep >= merge_rad:
-        return _shallow_bend(d, k, end, max(a[0], c[0]), agree)
-    limit = bend_ratio * max(a[0], c[0])
+        return _shallow_bend(d, k, end, far, agree)
+    limit = bend_ratio * far
     if vertex:
         # Never nearer than a shallow bend's vertex (``SHALLOW_BEND_RATIO``): the middles of
         # two runs can lie closer in bearing than the faces' normals. fig12's cut corner
         # (seed 29 at 417 s) read two runs 1.38 m off 22 degrees apart, a vertex of 1.41 m,
         # and four readings of 1.49-1.52 m between them made its faces two walls and a meet
         # point that is not there.
-        far = max(a[0], c[0])
         limit = min(limit, max(_bend_vertex(a[0], c[0], sep), SHALLOW_BEND_RATIO * far))
     # A view past the bend is some degrees wide; one stray reading is not (an outlier, and a
     # ring that fires fast sweeps hundreds of readings, outliers among them). Each reading
@@ -558,14 +557,17 @@ def _one_wall(
         if math.isfinite(d[k]) and d[k] > limit:
             deep.append(float(d[k]))
         k = (k + 1) % n
-    view = _agreeing(deep) if agree else len(deep)
+    view = _view(deep, agree)
     if view >= MIN_VIEW_READINGS and view * 2 * math.pi / n >= MIN_VIEW_RAD:
         return False
     return True if not deep else None
 
 
-def _agreeing(distances: list[float]) -> int:
-    """The most of ``distances`` that lie within ``VIEW_AGREE_REL`` of one another."""
+def _view(distances: list[float], agree: bool) -> int:
+    """How many readings of a view past a bend ``distances`` (the deeper ones) make: all of
+    them, or with ``agree`` the most that lie within ``VIEW_AGREE_REL`` of one another."""
+    if not agree:
+        return len(distances)
     v = sorted(distances)
     best, lo = 0, 0
     for hi, x in enumerate(v):
