@@ -14,6 +14,7 @@ from sim_backend.ground_truth import compute_gvg
 from sim_backend.world_files import load_world
 from tests.graph_walk import TrueGraph, from_ground_truth, passed_once, walk
 from tslam.core.explorer import Explorer, ExplorerParams
+from tslam.core.localize import Hypothesis
 from tslam.core.topomap import TopoMap
 from tslam.core.tracer import MeetPointReached
 
@@ -208,6 +209,28 @@ def test_a_piece_out_of_reach_is_merged_only_where_it_fits_alone(copies, merged)
     assert bool(ex._place_orphans(pieces[0][0])) is merged
     assert len(m.nodes()) == (before - 3 if merged else before)
     assert bool(ex.merges) is merged
+
+
+@pytest.mark.parametrize("remove_bare", [True, False])
+def test_a_node_out_of_reach_with_no_edge_goes_once_nothing_is_left(remove_bare):
+    """fig1 seed 41 finished with a junction whose only edge had been found to go past
+    another: four departures no path led to, and the map never complete."""
+    m, (piece,) = _copies(1)
+    for n in piece:  # every departure traced: to a dead end
+        for p, e in enumerate(m.node(n).ports):
+            if e is None:
+                m.connect(n, p, m.add_boundary(0.4, (0.0, 0.0)), 0, 1.0)
+    assert not m.unexplored()
+    bare = m.add_meet(1.2, (0.0, 2.1, 4.2), (3.1, 0.0))
+    kept = m.add_meet(1.2, (0.0, 2.1, 4.2), (3.2, 0.0))
+    ex = Explorer(NOMAD200_LIMITS, tmap=m, params=ExplorerParams(remove_bare=remove_bare))
+    ex.hyps.fragment.add(kept)
+    ex.hyps.live = [Hypothesis({kept: (piece[1], 0)})]  # a node a hypothesis names stays
+    assert ex._place_orphans(piece[0]) == {} and not ex.merges
+    assert m.has_node(bare) is not remove_bare and m.has_node(kept)
+    assert [n.text for n in ex.notes if "left with no edge" in n.text] == (
+        [f"node {bare}, left with no edge, removed"] if remove_bare else []
+    )
 
 
 @pytest.mark.parametrize("junction", ["7", "11"])

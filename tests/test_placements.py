@@ -49,6 +49,22 @@ def test_an_edge_that_only_bounds_the_mapped_one_does_not_prove_the_hypothesis()
     assert not own_fits and rivals == []
 
 
+def test_a_dead_end_reached_deeper_in_fits_with_the_depth_allowed():
+    """The edge into a dead end ends where the boundary rule stopped the robot: nearer the
+    walls, deeper in. A placement the prediction accepted (``Boundaries._dead_end_tol``)
+    must fit here too, or a proven hypothesis waits for ever (fig14 seed 1)."""
+    tmap = TopoMap()
+    a1 = tmap.add_meet(1.0, Y, (0.0, 0.0))
+    b1 = tmap.add_boundary(0.44, (0.0, 0.0))
+    tmap.connect(a1, 0, b1, 0, 0.36)
+    x = tmap.add_meet(1.0, Y, (0.0, 0.0))
+    y = tmap.add_boundary(0.29, (0.0, 0.0))
+    tmap.connect(x, 0, y, 0, 0.67)
+    h = Hypothesis({x: (a1, 0), y: (b1, 0)}, dead_ends=1)
+    assert other_placements(tmap, h, Tolerances()) == ([], False)
+    assert other_placements(tmap, h, Tolerances(), dead_end_depth=1.5) == ([], True)
+
+
 def test_a_search_too_large_for_its_budget_proves_nothing():
     tmap = TopoMap()
     for _ in range(30):

@@ -8,6 +8,7 @@ import math
 import os
 import stat
 import xml.etree.ElementTree as ET
+from dataclasses import replace
 
 import networkx as nx
 import pytest
@@ -15,7 +16,16 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tslam.core.signature import Signature, cyclic_gaps, rotations
-from tslam.core.topomap import TAU, Likeness, Link, MapError, MapFormatError, Step, TopoMap
+from tslam.core.topomap import (
+    TAU,
+    EdgeConflictError,
+    Likeness,
+    Link,
+    MapError,
+    MapFormatError,
+    Step,
+    TopoMap,
+)
 from tslam.programs.cli import UserError
 from tslam.programs.map_files import load_map, render_map_svg, save_map, save_map_svg
 
@@ -916,6 +926,33 @@ def test_a_merge_that_zips_onto_a_node_that_looks_otherwise_raises_when_told_to_
         m.merge(n1, n5, k, LIKE)
     m2, (a, _), _, (c, _), (d, _), k2 = two_sightings(4.2, clearance=1.05)
     assert set(m2.merge(a, c, k2, LIKE).nodes) == {c, d}
+
+
+def dead_ends(deep_length: float, deep_clearance: float):
+    """``two_sightings`` with a dead end off each sighting of corner 0: first reached 0.36 m
+    out at clearance 0.44 m, then ``deep_length`` out at ``deep_clearance``."""
+    m, (n1, p1), _, (n5, p5), _, k = two_sightings(4.0)
+    b1 = m.add_boundary(0.44, pose=(-2.0, 0.0))
+    b5 = m.add_boundary(deep_clearance, pose=(-2.0, 0.3))
+    m.connect(n1, p1["prev"], b1, 0, 0.36)
+    m.connect(n5, p5["prev"], b5, 0, deep_length)
+    return m, n1, n5, k
+
+
+def test_a_dead_end_reached_deeper_nearer_the_walls_is_the_same_edge():
+    """fig14 seed 1 mapped one dead end 0.36 m from its junction at clearance 0.44 m and
+    then 0.67 m at 0.29 m: the boundary rule stopped the robot where the gap pinched. The
+    prediction allows for that (``Boundaries._dead_end_tol``), so the merge must as well,
+    or the proven loop is never closed and the lab is mapped again and again."""
+    deeper = replace(LIKE, dead_end_depth=1.5)
+    m, n1, n5, k = dead_ends(0.67, 0.29)
+    with pytest.raises(EdgeConflictError):
+        m.plan_merge(n1, n5, k, LIKE)
+    assert n5 in m.plan_merge(n1, n5, k, deeper).nodes
+    # Deeper in by 0.39 m with 2 cm of clearance to show for it is another edge.
+    m2, a, c, k2 = dead_ends(0.75, 0.42)
+    with pytest.raises(EdgeConflictError):
+        m2.plan_merge(a, c, k2, deeper)
 
 
 def test_a_merge_zips_onto_a_dead_end_whatever_clearance_it_was_read_with():

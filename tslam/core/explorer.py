@@ -315,6 +315,10 @@ class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolvin
             if p is not None:
                 self.plan = []
                 return p
+            test = self._test_path(node) if self.p.test_paths else []
+            if test:
+                self.plan = test
+                return self.plan.pop(0).port
         if self.goal is not None and not self.hyps:
             if node == self.goal:
                 self.plan = []
@@ -342,6 +346,18 @@ class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolvin
             return None
         self.plan = path
         return self.plan.pop(0).port
+    def _test_path(self, node: int) -> list[Step]:
+        """The graph path to the nearest other node of the fragment with a departure that
+        tests the hypotheses. Exploring on from here instead, the robot makes arrivals no
+        hypothesis predicts, and they age out with their evidence: back at its first place
+        in fig13 (seed 2) with three nodes placed, one confirmation short of a merge, it
+        went on to the far table, and the three stayed copies for good."""
+        dist = self._distances(node)
+        near = sorted((dist[n], n) for n in self.hyps.fragment if n != node and n in dist)
+        for _, n in near:
+            if self._separating_port(n) is not None:
+                return self.map.shortest_path(node, n)
+        return []
     def _verify_path(self, node: int) -> list[Step]:
         """Once nothing is left to explore: the graph path along the nearest edge between
         two meet points traced only once, ending with that edge. A junction passed without

@@ -206,6 +206,15 @@ class ExplorerParams:
     # An edge to a dead end, reached again with the robot stopped this much nearer the walls,
     # may be longer by this many times as much (``_dead_end_tol``; 0: off).
     dead_end_depth: float = 1.5
+    # A merge keeps the tested hypotheses about other nodes onto other places open
+    # (``Resolving._apart_from``).
+    keep_apart: bool = True
+    # With no departure here that tests the hypotheses, go to the nearest node of the
+    # fragment that has one (``Explorer._test_path``).
+    test_paths: bool = True
+    # With nothing left to explore, a node out of reach with no edge at all goes from the
+    # map (``Resolving._place_orphans``).
+    remove_bare: bool = True
     # A new node's look-alikes include the nodes of the open fragment no hypothesis places
     # any more (``_new_edge``): the fragment may close onto itself (``_loops_apart``).
     close_fragment: bool = True

@@ -23,7 +23,7 @@ those). The explorer holds a merge for such a placement but tests no hypothesis 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from tslam.core.localize import Hypothesis, Tolerances
 from tslam.core.signature import rotations
@@ -41,15 +41,17 @@ def other_placements(
     budget: int = 20000,
     fits: PairFit | None = None,
     open_edges: bool = False,
+    dead_end_depth: float = 0.0,
 ) -> tuple[list[Placement], bool] | None:
     """Up to ``limit`` placements of ``h``'s fragment nodes other than ``h``'s own that fit
     the map as well, and whether ``h``'s own fits (an edge measured with a detour matched
     only as a lower bound, which is no proof); None if the search ran out of ``budget``
-    steps.
+    steps. An edge into a dead end may be longer by ``dead_end_depth`` times as much as its
+    boundary point was reached nearer the walls (``TopoMap.dead_end_gap``).
     """
     nodes = [x for x in h.mapping if tmap.has_node(x)]
     own = {x: h.mapping[x] for x in nodes}
-    found = placements(tmap, nodes, tol, limit + 1, budget, fits, open_edges)
+    found = placements(tmap, nodes, tol, limit + 1, budget, fits, open_edges, dead_end_depth)
     if found is None:
         return None
     others = [p for p in found if p != own]
@@ -64,6 +66,7 @@ def placements(
     budget: int = 20000,
     fits: PairFit | None = None,
     open_edges: bool = False,
+    dead_end_depth: float = 0.0,
 ) -> list[Placement] | None:
     """Up to ``limit`` placements of ``nodes`` and the edges between them on the map's
     other nodes, each pair passing ``fits`` if given; None if the search ran out of
@@ -71,7 +74,7 @@ def placements(
     links = _links(tmap, nodes)
     order = _order(nodes, links)
     found: list[Placement] = []
-    search = _Search(tmap, order, links, set(nodes), tol, fits, open_edges, budget)
+    search = _Search(tmap, order, links, set(nodes), tol, fits, open_edges, budget, dead_end_depth)
     try:
         for placement in search.place({}):
             if open_edges and not search.matches(placement):
@@ -132,6 +135,7 @@ class _Search:
     fits: PairFit | None
     open_edges: bool
     budget: int  # steps left
+    dead_end_depth: float = 0.0
 
     def place(self, done: Placement) -> Iterator[Placement]:
         if len(done) == len(self.order):
@@ -210,6 +214,10 @@ class _Search:
             w, r = edge.other_end(c, (p + k) % deg)
             if w != cy or r != (q + ky) % tmap.node(cy).degree:
                 return False
-            if not self.tol.length_ok(length, edge.length_m):
+            tol = self.tol
+            gap = tmap.dead_end_gap((x, y), (c, cy)) if self.dead_end_depth else 0.0
+            if gap:
+                tol = replace(tol, length_abs_m=tol.length_abs_m + self.dead_end_depth * gap)
+            if not tol.length_ok(length, edge.length_m):
                 return False
         return True

@@ -260,7 +260,12 @@ class Resolving(ExplorerState):
         old = {x: ck for x, ck in h.mapping.items() if x not in self.hyps.fragment}
         if not old:
             return other_placements(
-                view, h, self.p.tol, fits=self._heading_fits, open_edges=open_edges
+                view,
+                h,
+                self.p.tol,
+                fits=self._heading_fits,
+                open_edges=open_edges,
+                dead_end_depth=self.p.dead_end_depth,
             )
         merged = self._merged_copy(old, view)
         if merged is None:
@@ -278,6 +283,7 @@ class Resolving(ExplorerState):
             self.p.tol,
             fits=self._heading_fits,
             open_edges=open_edges,
+            dead_end_depth=self.p.dead_end_depth,
         )
 
     def _fold_implied(self, tested: list[Hypothesis]) -> list[Hypothesis]:
@@ -337,8 +343,14 @@ class Resolving(ExplorerState):
         meet points a confirmation, each dead end half of one). Returns the merge's renames
         (empty if nothing merged): a merge may rename the node the robot stands at too.
         """
+        named = {n for h in self.hyps.live for x, (c, _) in h.mapping.items() for n in (x, c)}
         for comp in sorted(nx.connected_components(self.map.graph), key=min):
             if here in comp or not any(None in self.map.node(n).ports for n in comp):
+                continue
+            if len(comp) == 1 and self.p.remove_bare:
+                # A junction found along the only edge of a node left it with none (fig1
+                # seed 41): a look, and four departures no path leads to.
+                self._remove_bare(comp, named)
                 continue
             nodes = sorted(comp)
             kinds = [{self.map.node(e.u).kind, self.map.node(e.v).kind} for e in self.map.edges()
@@ -351,7 +363,14 @@ class Resolving(ExplorerState):
             evidence = self.p.merge_evidence - (1 if prior else 0)
             if not h.proven(evidence, self.p.weigh_crowd):
                 continue
-            found = placements(self.map, nodes, self.p.tol, 2, fits=self._heading_fits)
+            found = placements(
+                self.map,
+                nodes,
+                self.p.tol,
+                2,
+                fits=self._heading_fits,
+                dead_end_depth=self.p.dead_end_depth,
+            )
             if found is None or len(found) != 1:
                 continue
             h.mapping = dict(found[0])
@@ -386,11 +405,15 @@ class Resolving(ExplorerState):
                 continue
             self.map.set_ambiguous(x, others)
             for p, e in enumerate(self.map.node(x).ports):
-                if not lost and e is None and all(
-                    (img := h.image_port(self.map, x, p)) is not None
-                    and self.map.node(img[0]).ports[img[1]] is not None
-                    for h in tested
-                    if x in h.mapping
+                if (
+                    not lost
+                    and e is None
+                    and all(
+                        (img := h.image_port(self.map, x, p)) is not None
+                        and self.map.node(img[0]).ports[img[1]] is not None
+                        for h in tested
+                        if x in h.mapping
+                    )
                 ):
                     self.frozen.add((x, p))
             self._note(f"node {x} is ambiguous with {sorted(others)}: not merged")
@@ -470,6 +493,11 @@ class Resolving(ExplorerState):
         )
         self._apply_renames(renamed)
         fragment = {renamed.get(x, (x, 0))[0] for x in self.hyps.fragment}
+        # The nodes merged onto old places leave the fragment (a loop's images were in it).
+        old = {c for c, _ in h.mapping.values()} - self.hyps.fragment
+        fragment -= {renamed.get(c, (c, 0))[0] for c in old}
+        if self.p.keep_apart:
+            keep = [*keep, *self._apart_from(h, keep)]
         self.hyps.clear()
         for o in keep:
             kept = self._renamed_hypothesis(o, renamed)
@@ -479,6 +507,23 @@ class Resolving(ExplorerState):
             self.hyps.fragment = {x for x in fragment if self.map.has_node(x)}
         self._grow_merged(renamed)
         return renamed
+
+    def _apart_from(self, h: Hypothesis, keep: Sequence[Hypothesis]) -> list[Hypothesis]:
+        """The tested hypotheses about other nodes of the fragment than ``h``'s, onto other
+        old nodes: merging ``h`` neither proves nor refutes them, and dropped with it their
+        evidence went and their nodes stayed copies for good. In fig13 (seed 2) the robot
+        came back to its first place and had three nodes placed, one confirmation short of a
+        merge, when it reached the far table's loop again; the loop was closed, the three
+        were dropped, and the map held them twice from then on."""
+        mine = set(h.mapping) | {c for c, _ in h.mapping.values()}
+        return [
+            o
+            for o in self.hyps.live
+            if o is not h
+            and o.tested
+            and all(o is not k for k in keep)
+            and not (set(o.mapping) | {c for c, _ in o.mapping.values()}) & mine
+        ]
 
     def _remove_cuts(self, h: Hypothesis) -> None:
         """Take out the edges ``h`` says went past a junction. A node left with no edge at
@@ -493,13 +538,7 @@ class Resolving(ExplorerState):
             self.map.remove_edge(e)
             self.edge_gap.pop(e, None)
         self._note(f"edge(s) {', '.join(map(str, cuts))} went past a junction: removed")
-        busy = {self.here, self.goal, None if self.leaving is None else self.leaving[0]}
-        busy |= set(h.mapping) | {c for c, _ in h.mapping.values()}
-        for n in sorted(ends - busy):
-            if self.map.has_node(n) and all(e is None for e in self.map.node(n).ports):
-                self.map.remove_node(n)
-                self.hyps.fragment.discard(n)
-                self._note(f"node {n}, left with no edge, removed")
+        self._remove_bare(ends, set(h.mapping) | {c for c, _ in h.mapping.values()})
 
     def _false_loop(self, h: Hypothesis, view: TopoMap | None = None) -> tuple[int, float] | None:
         """An edge the merge of ``h`` would make a loop although dead reckoning, good over
