@@ -262,11 +262,14 @@ class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolvin
         if contracted is not None:
             node, pm = contracted
         port = self._next_port(node, pm.arrival)
-        if port is None and self.p.place_orphans:
+        while port is None and self.p.place_orphans:
+            # Each pass merges a piece out of reach or drops the rest: the map's pieces
+            # fewer, so this ends. Placed, a piece may bring departures to explore.
             renamed = self._place_orphans(node)
-            if renamed:
-                node, pm = self._stand(ev, node, pm, renamed)
-                port = self._next_port(node, pm.arrival)
+            if not renamed:
+                break
+            node, pm = self._stand(ev, node, pm, renamed)
+            port = self._next_port(node, pm.arrival)
         if port is None:
             self._hold(node)
             return ev.arrival_index or 0

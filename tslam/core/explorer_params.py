@@ -212,9 +212,9 @@ class ExplorerParams:
     # With no departure here that tests the hypotheses, go to the nearest node of the
     # fragment that has one (``Explorer._test_path``).
     test_paths: bool = True
-    # With nothing left to explore, a node out of reach with no edge at all goes from the
-    # map (``Resolving._place_orphans``).
-    remove_bare: bool = True
+    # With nothing left to explore where the robot is, the pieces of map out of its reach go
+    # (``Resolving._drop_detached``).
+    drop_detached: bool = True
     # A new node's look-alikes include the nodes of the open fragment no hypothesis places
     # any more (``_new_edge``): the fragment may close onto itself (``_loops_apart``).
     close_fragment: bool = True

@@ -343,14 +343,8 @@ class Resolving(ExplorerState):
         meet points a confirmation, each dead end half of one). Returns the merge's renames
         (empty if nothing merged): a merge may rename the node the robot stands at too.
         """
-        named = {n for h in self.hyps.live for x, (c, _) in h.mapping.items() for n in (x, c)}
         for comp in sorted(nx.connected_components(self.map.graph), key=min):
             if here in comp or not any(None in self.map.node(n).ports for n in comp):
-                continue
-            if len(comp) == 1 and self.p.remove_bare:
-                # A junction found along the only edge of a node left it with none (fig1
-                # seed 41): a look, and four departures no path leads to.
-                self._remove_bare(comp, named)
                 continue
             nodes = sorted(comp)
             kinds = [{self.map.node(e.u).kind, self.map.node(e.v).kind} for e in self.map.edges()
@@ -380,7 +374,33 @@ class Resolving(ExplorerState):
             renamed = self._merge(h)
             if renamed:
                 return renamed  # the components have changed: the next arrival looks again
+        if self.p.drop_detached:
+            self._drop_detached(here)
         return {}
+
+    def _drop_detached(self, here: int) -> None:
+        """Once the piece of map the robot is in has nothing left to explore, the pieces it
+        cannot reach are copies of its places: the GVG is connected, so a piece whose every
+        departure was traced holds every place the robot has been. They go from the map,
+        but what a live hypothesis names. fig16 (seeds 12, 25, 40 and 44) finished so with a
+        junction first read at its weak point with three edges, unattached, its departures
+        unexplored for good; fig1 seed 41 with a node whose only edge had gone past a
+        junction, a look and four departures. Each piece that fits one place only was
+        merged there first (``_place_orphans``)."""
+        own = nx.node_connected_component(self.map.graph, here)
+        if any(None in self.map.node(n).ports for n in own):
+            return
+        named = {n for h in self.hyps.live for x, (c, _) in h.mapping.items() for n in (x, c)}
+        for comp in sorted(nx.connected_components(self.map.graph), key=min):
+            if comp & (own | named):
+                continue
+            for n in sorted(comp):
+                self.map.remove_node(n)
+                self.hyps.fragment.discard(n)
+            self._note(
+                f"nodes {', '.join(map(str, sorted(comp)))}, out of reach of a map with nothing "
+                "left to explore: copies of its places, dropped"
+            )
 
     def _abandon_hypotheses(self, lost: bool = False) -> None:
         """Nothing can tell the fragment from its look-alikes: keep its nodes as new places,
