@@ -211,26 +211,47 @@ def test_a_piece_out_of_reach_is_merged_only_where_it_fits_alone(copies, merged)
     assert bool(ex.merges) is merged
 
 
-@pytest.mark.parametrize("remove_bare", [True, False])
-def test_a_node_out_of_reach_with_no_edge_goes_once_nothing_is_left(remove_bare):
-    """fig1 seed 41 finished with a junction whose only edge had been found to go past
-    another: four departures no path led to, and the map never complete."""
+def _closed_piece_and_strays(drop: bool, closed: bool) -> tuple[Explorer, list[int], dict]:
+    """The robot's piece of map (three junctions; with ``closed`` every departure traced to
+    a dead end), a node out of reach with no edge, a stray pair joined by an edge, and a
+    node out of reach that a live hypothesis names."""
     m, (piece,) = _copies(1)
-    for n in piece:  # every departure traced: to a dead end
+    for n in piece[: 3 if closed else 2]:
         for p, e in enumerate(m.node(n).ports):
             if e is None:
                 m.connect(n, p, m.add_boundary(0.4, (0.0, 0.0)), 0, 1.0)
-    assert not m.unexplored()
-    bare = m.add_meet(1.2, (0.0, 2.1, 4.2), (3.1, 0.0))
-    kept = m.add_meet(1.2, (0.0, 2.1, 4.2), (3.2, 0.0))
-    ex = Explorer(NOMAD200_LIMITS, tmap=m, params=ExplorerParams(remove_bare=remove_bare))
-    ex.hyps.fragment.add(kept)
-    ex.hyps.live = [Hypothesis({kept: (piece[1], 0)})]  # a node a hypothesis names stays
+    stray = {
+        "bare": m.add_meet(1.2, (0.0, 2.1, 4.2), (3.1, 0.0)),
+        "named": m.add_meet(1.2, (0.0, 2.1, 4.2), (3.2, 0.0)),
+        "pair": m.add_meet(1.2, (0.0, 2.1, 4.2), (3.3, 0.0)),
+    }
+    m.connect(stray["pair"], 0, m.add_boundary(0.4, (3.3, 1.0)), 0, 1.0)
+    ex = Explorer(NOMAD200_LIMITS, tmap=m, params=ExplorerParams(drop_detached=drop))
+    ex.hyps.fragment.add(stray["named"])
+    ex.hyps.live = [Hypothesis({stray["named"]: (piece[1], 0)})]
+    return ex, piece, stray
+
+
+@pytest.mark.parametrize("drop", [True, False])
+def test_pieces_out_of_reach_go_once_the_robots_piece_is_finished(drop):
+    """fig16 seeds 12, 25, 40 and 44 finished with a junction first read at its weak point,
+    unattached, its departures unexplored for good; fig1 seed 41 with a node whose only edge
+    had gone past a junction. The GVG is connected: the robot's finished piece holds every
+    place it has been, and the rest are copies."""
+    ex, piece, stray = _closed_piece_and_strays(drop, closed=True)
+    assert not [n for n in ex.map.unexplored() if n[0] in piece]
+    before = len(ex.map.nodes())
     assert ex._place_orphans(piece[0]) == {} and not ex.merges
-    assert m.has_node(bare) is not remove_bare and m.has_node(kept)
-    assert [n.text for n in ex.notes if "left with no edge" in n.text] == (
-        [f"node {bare}, left with no edge, removed"] if remove_bare else []
-    )
+    gone = {k for k, n in stray.items() if not ex.map.has_node(n)}
+    assert gone == ({"bare", "pair"} if drop else set())
+    assert len(ex.map.nodes()) == before - (3 if drop else 0)  # the pair's dead end too
+    assert all(ex.map.has_node(n) for n in piece)
+
+
+def test_pieces_out_of_reach_stay_while_the_robots_piece_has_departures_to_explore():
+    ex, piece, stray = _closed_piece_and_strays(True, closed=False)
+    ex._place_orphans(piece[0])
+    assert all(ex.map.has_node(n) for n in stray.values())
 
 
 @pytest.mark.parametrize("junction", ["7", "11"])
