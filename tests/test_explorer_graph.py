@@ -186,10 +186,10 @@ def test_a_fragment_left_out_of_reach_by_losing_the_way_is_placed_and_the_map_fi
     assert runs[False].done and runs[False].map.unexplored()
 
 
-def _copies(n: int) -> tuple[TopoMap, list[list[int]]]:
-    """``n`` unconnected copies of one stretch of map: three junctions in a row, 3 m and
-    4 m apart, each with a departure still to explore."""
-    m = TopoMap()
+def _copies(n: int, m: TopoMap | None = None) -> tuple[TopoMap, list[list[int]]]:
+    """``n`` unconnected copies of one stretch of map (in ``m`` if given): three junctions
+    in a row, 3 m and 4 m apart, each with a departure still to explore."""
+    m = TopoMap() if m is None else m
     out = []
     for i in range(n):
         nodes = [m.add_meet(1.2, (0.0, 2.1, 4.2), (10.0 * i + x, 0.0)) for x in (0.0, 3.0, 7.0)]
@@ -215,7 +215,8 @@ def _closed_piece_and_strays(drop: bool, closed: bool) -> tuple[Explorer, list[i
     """The robot's piece of map (three junctions; with ``closed`` every departure traced to
     a dead end), a node out of reach with no edge, a stray pair joined by an edge, and a
     node out of reach that a live hypothesis names."""
-    m, (piece,) = _copies(1)
+    ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(drop_detached=drop))
+    m, (piece,) = _copies(1, ex.map)  # built by this run: no stored map
     for n in piece[: 3 if closed else 2]:
         for p, e in enumerate(m.node(n).ports):
             if e is None:
@@ -226,7 +227,6 @@ def _closed_piece_and_strays(drop: bool, closed: bool) -> tuple[Explorer, list[i
         "pair": m.add_meet(1.2, (0.0, 2.1, 4.2), (3.3, 0.0)),
     }
     m.connect(stray["pair"], 0, m.add_boundary(0.4, (3.3, 1.0)), 0, 1.0)
-    ex = Explorer(NOMAD200_LIMITS, tmap=m, params=ExplorerParams(drop_detached=drop))
     ex.hyps.fragment.add(stray["named"])
     ex.hyps.live = [Hypothesis({stray["named"]: (piece[1], 0)})]
     return ex, piece, stray
@@ -252,6 +252,17 @@ def test_pieces_out_of_reach_stay_while_the_robots_piece_has_departures_to_explo
     ex, piece, stray = _closed_piece_and_strays(True, closed=False)
     ex._place_orphans(piece[0])
     assert all(ex.map.has_node(n) for n in stray.values())
+
+
+def test_a_stored_map_out_of_reach_stays():
+    m, (piece, stored) = _copies(2)
+    ex = Explorer(NOMAD200_LIMITS, tmap=m)  # both pieces are an earlier run's
+    for n in piece:
+        for p, e in enumerate(m.node(n).ports):
+            if e is None:
+                m.connect(n, p, m.add_boundary(0.4, (0.0, 0.0)), 0, 1.0)
+    ex._drop_detached(piece[0])
+    assert all(m.has_node(n) for n in stored)
 
 
 @pytest.mark.parametrize("junction", ["7", "11"])

@@ -382,18 +382,18 @@ class Resolving(ExplorerState):
         """Once the piece of map the robot is in has nothing left to explore, the pieces it
         cannot reach are copies of its places: the GVG is connected, so a piece whose every
         departure was traced holds every place the robot has been. They go from the map,
-        but what a live hypothesis names. fig16 (seeds 12, 25, 40 and 44) finished so with a
-        junction first read at its weak point with three edges, unattached, its departures
-        unexplored for good; fig1 seed 41 with a node whose only edge had gone past a
-        junction, a look and four departures. Each piece that fits one place only was
-        merged there first (``_place_orphans``)."""
+        but what a live hypothesis names and what a stored map held. fig16 (seeds 12, 25,
+        40 and 44) finished so with a junction first read at its weak point with three
+        edges, unattached, its departures unexplored for good; fig1 seed 41 with a node
+        whose only edge had gone past a junction, a look and four departures. Each piece
+        that fits one place only was merged there first (``_place_orphans``)."""
         own = nx.node_connected_component(self.map.graph, here)
         if any(None in self.map.node(n).ports for n in own):
             return
         named = {n for h in self.hyps.live for x, (c, _) in h.mapping.items() for n in (x, c)}
         for comp in sorted(nx.connected_components(self.map.graph), key=min):
-            if comp & (own | named):
-                continue
+            if comp & (own | named | self.stored):
+                continue  # a stored map is an earlier run's: kept, whatever it duplicates
             for n in sorted(comp):
                 self.map.remove_node(n)
                 self.hyps.fragment.discard(n)
