@@ -17,7 +17,10 @@ from tslam.programs.sim_cmd import explore, report
 
 @pytest.mark.parametrize("bound", [30, 0])
 def test_fig15_records_its_ambiguity_once_the_fragment_has_grown_too_far(bound):
-    params = replace(ExplorerParams(), fragment_max=bound)
+    # Without ``test_paths``, as when the bound was made: with it, the robot goes back to
+    # test the hypotheses, the fragment grows to 8 nodes only, and the ambiguity is recorded
+    # before any bound is reached (the test below).
+    params = replace(ExplorerParams(), fragment_max=bound, test_paths=False)
     run = explore("fig15", 5, "paper", duration_s=1300.0, progress=False, params=params)
     rep = report(run, "fig15", 5, "paper")
     assert rep["false_merges"] == 0
@@ -29,3 +32,11 @@ def test_fig15_records_its_ambiguity_once_the_fragment_has_grown_too_far(bound):
         assert min(sizes) >= bound
     else:
         assert not notes and rep["ambiguous_nodes"] == 0, rep
+
+
+def test_fig15_testing_its_hypotheses_records_the_ambiguity_before_the_bound():
+    run = explore("fig15", 5, "paper", duration_s=1300.0, progress=False)
+    rep = report(run, "fig15", 5, "paper")
+    assert rep["false_merges"] == 0 and rep["ambiguous_nodes"] > 0, rep
+    assert not [n for n in run.explorer.notes if "no move has told" in n.text]
+    assert any("is ambiguous with" in n.text for n in run.explorer.notes)
