@@ -286,20 +286,6 @@ class ExplorerState:
         self.merges.append(merged)
         return renamed, merged
 
-    def _remove_bare(self, nodes: set[int], busy: set[int]) -> None:
-        """Remove those of ``nodes`` left with no edge at all, but the ``busy`` ones and
-        those the robot is at, bound for or leaving. Such a node holds nothing but a look:
-        its place is mapped elsewhere, no path leads to it, and its departures, unexplored,
-        leave the map incomplete for good."""
-        busy = busy | {n for n in (self.here, self.goal) if n is not None}
-        if self.leaving is not None:
-            busy.add(self.leaving[0])
-        for n in sorted(nodes - busy):
-            if self.map.has_node(n) and all(e is None for e in self.map.node(n).ports):
-                self.map.remove_node(n)
-                self.hyps.fragment.discard(n)
-                self._note(f"node {n}, left with no edge, removed")
-
     def _tol(self, slack_m: float = 0.0, clearance_slack_m: float = 0.0) -> Tolerances:
         tol = self.p.tol
         if slack_m:

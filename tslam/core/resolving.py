@@ -383,7 +383,7 @@ class Resolving(ExplorerState):
         cannot reach are copies of its places: the GVG is connected, so a piece whose every
         departure was traced holds every place the robot has been. They go from the map,
         but what a live hypothesis names and what a stored map held. fig16 (seeds 12, 25,
-        40 and 44) finished so with a junction first read at its weak point with three
+        36, 40 and 44) finished so with a junction first read at its weak point with three
         edges, unattached, its departures unexplored for good; fig1 seed 41 with a node
         whose only edge had gone past a junction, a look and four departures. Each piece
         that fits one place only was merged there first (``_place_orphans``)."""
@@ -425,15 +425,11 @@ class Resolving(ExplorerState):
                 continue
             self.map.set_ambiguous(x, others)
             for p, e in enumerate(self.map.node(x).ports):
-                if (
-                    not lost
-                    and e is None
-                    and all(
-                        (img := h.image_port(self.map, x, p)) is not None
-                        and self.map.node(img[0]).ports[img[1]] is not None
-                        for h in tested
-                        if x in h.mapping
-                    )
+                if not lost and e is None and all(
+                    (img := h.image_port(self.map, x, p)) is not None
+                    and self.map.node(img[0]).ports[img[1]] is not None
+                    for h in tested
+                    if x in h.mapping
                 ):
                     self.frozen.add((x, p))
             self._note(f"node {x} is ambiguous with {sorted(others)}: not merged")
@@ -558,7 +554,13 @@ class Resolving(ExplorerState):
             self.map.remove_edge(e)
             self.edge_gap.pop(e, None)
         self._note(f"edge(s) {', '.join(map(str, cuts))} went past a junction: removed")
-        self._remove_bare(ends, set(h.mapping) | {c for c, _ in h.mapping.values()})
+        busy = {self.here, self.goal, None if self.leaving is None else self.leaving[0]}
+        busy |= set(h.mapping) | {c for c, _ in h.mapping.values()}
+        for n in sorted(ends - busy):
+            if self.map.has_node(n) and all(e is None for e in self.map.node(n).ports):
+                self.map.remove_node(n)
+                self.hyps.fragment.discard(n)
+                self._note(f"node {n}, left with no edge, removed")
 
     def _false_loop(self, h: Hypothesis, view: TopoMap | None = None) -> tuple[int, float] | None:
         """An edge the merge of ``h`` would make a loop although dead reckoning, good over
