@@ -386,7 +386,9 @@ class Resolving(ExplorerState):
         36, 40 and 44) finished so with a junction first read at its weak point with three
         edges, unattached, its departures unexplored for good; fig1 seed 41 with a node
         whose only edge had gone past a junction, a look and four departures. Each piece
-        that fits one place only was merged there first (``_place_orphans``)."""
+        that fits one place only was merged there first (``_place_orphans``), and a piece
+        with a junction read more fully than its look-alikes here stays
+        (``_read_as_fully``)."""
         own = nx.node_connected_component(self.map.graph, here)
         if any(None in self.map.node(n).ports for n in own):
             return
@@ -394,6 +396,8 @@ class Resolving(ExplorerState):
         for comp in sorted(nx.connected_components(self.map.graph), key=min):
             if comp & (own | named | self.stored):
                 continue  # a stored map is an earlier run's: kept, whatever it duplicates
+            if not all(self._read_as_fully(n, own) for n in comp):
+                continue
             for n in sorted(comp):
                 self.map.remove_node(n)
                 self.hyps.fragment.discard(n)
@@ -401,6 +405,25 @@ class Resolving(ExplorerState):
                 f"nodes {', '.join(map(str, sorted(comp)))}, out of reach of a map with nothing "
                 "left to explore: copies of its places, dropped"
             )
+
+    def _read_as_fully(self, n: int, piece: set[int]) -> bool:
+        """Whether ``piece`` holds a meet point like ``n`` (its clearance) with as many
+        edges or more; any boundary point is like another. A piece out of reach holding a
+        junction read with an edge more than anything like it in the robot's finished piece
+        holds what that piece lacks: fig16 seed 20 finished with its corridor place read
+        with three edges, and the one piece out of reach held it with four, both dead ends
+        of the indent. Angles cannot tell more: read with three edges, that place shows one
+        dead end or the other at the same bearing (seed 75)."""
+        x = self.map.node(n)
+        if x.kind != "meet":
+            return True
+        tol = self.p.tol.clearance_m
+        return any(
+            (m := self.map.node(c)).kind == "meet"
+            and m.degree >= x.degree
+            and abs(m.clearance_m - x.clearance_m) <= tol + self.span.get(c, 0.0)
+            for c in piece
+        )
 
     def _abandon_hypotheses(self, lost: bool = False) -> None:
         """Nothing can tell the fragment from its look-alikes: keep its nodes as new places,
@@ -609,3 +632,4 @@ class Resolving(ExplorerState):
             if old is not None and r not in self.port_bearings:
                 n_ports = len(old)
                 self.port_bearings[r] = tuple(old[(p - shift) % n_ports] for p in range(n_ports))
+
