@@ -213,8 +213,8 @@ def test_a_piece_out_of_reach_is_merged_only_where_it_fits_alone(copies, merged)
 
 def _closed_piece_and_strays(drop: bool, closed: bool) -> tuple[Explorer, list[int], dict]:
     """The robot's piece of map (three junctions; with ``closed`` every departure traced to
-    a dead end), a node out of reach with no edge, a stray pair joined by an edge, and a
-    node out of reach that a live hypothesis names."""
+    a dead end) and, out of its reach: a node with no edge, a junction and its dead end, a
+    node a live hypothesis names, and two junctions unlike any in the robot's piece."""
     ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(drop_detached=drop))
     m, (piece,) = _copies(1, ex.map)  # built by this run: no stored map
     for n in piece[: 3 if closed else 2]:
@@ -225,6 +225,11 @@ def _closed_piece_and_strays(drop: bool, closed: bool) -> tuple[Explorer, list[i
         "bare": m.add_meet(1.2, (0.0, 2.1, 4.2), (3.1, 0.0)),
         "named": m.add_meet(1.2, (0.0, 2.1, 4.2), (3.2, 0.0)),
         "pair": m.add_meet(1.2, (0.0, 2.1, 4.2), (3.3, 0.0)),
+        # Read with an edge more than any junction of the robot's piece: it may hold what
+        # that piece lacks (fig16 seed 20: the corridor place with both dead ends).
+        "fuller": m.add_meet(1.2, (0.0, 1.6, 3.1, 4.7), (3.4, 0.0)),
+        # As many edges, but wider than anything in the robot's piece.
+        "wider": m.add_meet(2.0, (0.0, 2.1, 4.2), (3.5, 0.0)),
     }
     m.connect(stray["pair"], 0, m.add_boundary(0.4, (3.3, 1.0)), 0, 1.0)
     ex.hyps.fragment.add(stray["named"])
@@ -245,6 +250,7 @@ def test_pieces_out_of_reach_go_once_the_robots_piece_is_finished(drop):
     gone = {k for k, n in stray.items() if not ex.map.has_node(n)}
     assert gone == ({"bare", "pair"} if drop else set())
     assert len(ex.map.nodes()) == before - (3 if drop else 0)  # the pair's dead end too
+    assert ex.map.has_node(stray["fuller"]) and ex.map.has_node(stray["wider"])
     assert all(ex.map.has_node(n) for n in piece)
 
 
