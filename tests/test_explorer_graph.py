@@ -239,7 +239,7 @@ def _closed_piece_and_strays(drop: bool, closed: bool) -> tuple[Explorer, list[i
 
 @pytest.mark.parametrize("drop", [True, False])
 def test_pieces_out_of_reach_go_once_the_robots_piece_is_finished(drop):
-    """fig16 seeds 12, 25, 40 and 44 finished with a junction first read at its weak point,
+    """fig16 seeds 12, 25, 36, 40 and 44 finished with a junction first read at its weak point,
     unattached, its departures unexplored for good; fig1 seed 41 with a node whose only edge
     had gone past a junction. The GVG is connected: the robot's finished piece holds every
     place it has been, and the rest are copies."""
