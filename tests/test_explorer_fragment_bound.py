@@ -17,10 +17,11 @@ from tslam.programs.sim_cmd import explore, report
 
 @pytest.mark.parametrize("bound", [30, 0])
 def test_fig15_records_its_ambiguity_once_the_fragment_has_grown_too_far(bound):
-    # Without ``test_paths``, as when the bound was made: with it, the robot goes back to
-    # test the hypotheses, the fragment grows to 8 nodes only, and the ambiguity is recorded
-    # before any bound is reached (the test below).
-    params = replace(ExplorerParams(), fragment_max=bound, test_paths=False)
+    # Without ``test_paths`` and with hypotheses ageing out after two silent arrivals, as
+    # when the bound was made: with them, the robot goes back to test the hypotheses, the
+    # fragment grows to 8 nodes only, and the ambiguity is recorded before any bound is
+    # reached (the test below).
+    params = replace(ExplorerParams(), fragment_max=bound, test_paths=False, silent_life=2)
     run = explore("fig15", 5, "paper", duration_s=1300.0, progress=False, params=params)
     rep = report(run, "fig15", 5, "paper")
     assert rep["false_merges"] == 0
