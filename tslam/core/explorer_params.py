@@ -264,6 +264,9 @@ class ExplorerParams:
     # ... and a dead end reached past the meet point a hypothesis predicted, as far as the
     # two edges, keeps it (``Boundaries._past_to_dead_end``).
     past_to_dead_end: bool = True
+    # ... and a reading that may be such an old place as it is, is not read as a look-alike
+    # with an edge fewer (``Arrival._past_as_read``).
+    look_alike_past: bool = True
     # ... and a junction found on an edge a hypothesis said went past one, where it said,
     # confirms it (``Unhomed._found_past``; False: it is dropped).
     past_found: bool = True
