@@ -208,6 +208,9 @@ class ExplorerParams:
     # An edge to a dead end, reached again with the robot stopped this much nearer the walls,
     # may be longer by this many times as much (``_dead_end_tol``; 0: off).
     dead_end_depth: float = 1.5
+    # A merge that reaches two readings of one place, one with an edge fewer, reads that one
+    # as the other (merge_grow.py; False: the merge is refused).
+    merge_grows: bool = True
     # A merge keeps the tested hypotheses about other nodes onto other places open
     # (``Resolving._apart_from``).
     keep_apart: bool = True

@@ -80,6 +80,10 @@ class Hypothesis:
     # its fragment found a meet point partway along, or a fragment edge that went past an
     # old node to the one beyond. They go from the map when the hypothesis is merged.
     cuts: set[int] = field(default_factory=set)
+    # Nodes its merge reads again with an edge more, as the places they are (merge_grow.py):
+    # node -> (departures, clearance, port p's edge moves to carry[p]). Worked out anew each
+    # time the merge is tried.
+    grows: dict[int, tuple[tuple[float, ...], float, dict[int, int]]] = field(default_factory=dict)
 
     @property
     def tested(self) -> bool:

@@ -10,11 +10,12 @@ from dataclasses import replace
 
 import networkx as nx
 
-from tslam.core.explorer_state import MAX_CUTS, ExplorerState
+from tslam.core.explorer_state import MAX_CUTS
 from tslam.core.localize import Hypotheses, Hypothesis, separating_port
+from tslam.core.merge_grow import MAX_GROWS, MergeGrow
 from tslam.core.placements import Placement, other_placements, placements
 from tslam.core.portmap import PortMap, turned_onto
-from tslam.core.topomap import EdgeConflictError, MapError, TopoMap
+from tslam.core.topomap import DegreeConflictError, EdgeConflictError, MapError, TopoMap
 from tslam.core.tracer import MeetPointReached
 from tslam.core.zipmerge import implies, merge_mapping
 
@@ -25,7 +26,7 @@ FOLD_MAX = 4
 LOOP_MARGIN = 2  # confirmations a loop or a placement needs over the other kind
 
 
-class Resolving(ExplorerState):
+class Resolving(MergeGrow):
     """Testing, merging and giving up on localization hypotheses."""
 
     def _age(self, hyps: list[Hypothesis], spoke: set[int]) -> list[Hypothesis]:
@@ -461,9 +462,11 @@ class Resolving(ExplorerState):
     def _view(self, h: Hypothesis) -> TopoMap:
         """The map as ``h`` says it is: without the edges it found went past a junction."""
         cuts = sorted(e for e in h.cuts if self.map.has_edge(e))
-        if not cuts:
+        if not cuts and not h.grows:
             return self.map
         view = self.map.copy()
+        for n, (deps, clearance, carry) in sorted(h.grows.items()):
+            view.reread(n, deps, clearance, carry)
         for e in cuts:
             view.remove_edge(e)
         return view
@@ -474,7 +477,10 @@ class Resolving(ExplorerState):
         between two meet points (the first tracing went past one: fig13's meet point 0,
         whose third wall the ring rarely resolves, joined meet points 1 and 2 by one 4.3 m
         edge). None, with a note, if the map refuses the merge. It is tried on a copy, so a
-        refused merge leaves the map as it was (merging the real one could stop halfway)."""
+        refused merge leaves the map as it was (merging the real one could stop halfway).
+        With ``merge_grows``, two readings of one place an edge apart in degree are read
+        as the one with more edges (merge_grow.py)."""
+        h.grows = {}
         while True:
             view = self._view(h)
             try:
@@ -486,6 +492,14 @@ class Resolving(ExplorerState):
                     self._note(f"merge refused by the map ({exc}): keeping both")
                     return None
                 h.cuts.add(e)
+            except DegreeConflictError as exc:
+                grow = None
+                if self.p.merge_grows and len(h.grows) < MAX_GROWS:
+                    grow = self._grow(view, exc.ends)
+                if grow is None or grow[0] in h.grows:
+                    self._note(f"merge refused by the map ({exc}): keeping both")
+                    return None
+                h.grows[grow[0]] = grow[1:]
             except MapError as exc:
                 self._note(f"merge refused by the map ({exc}): keeping both")
                 return None
@@ -517,7 +531,8 @@ class Resolving(ExplorerState):
             )
             self._abandon_hypotheses()
             return {}
-        if view is not self.map:
+        self._apply_grows(h)
+        if any(self.map.has_edge(e) for e in h.cuts):
             self._remove_cuts(h)
         try:
             renamed, merged = self._merge_recorded(h.mapping, self._likeness())

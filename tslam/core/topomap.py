@@ -50,6 +50,15 @@ class EdgeConflictError(MapError):
         self.edges = edges
 
 
+class DegreeConflictError(MapError):
+    """A merge would make two meet nodes one whose degrees differ by one, each reached by an
+    edge the merge makes one: ``ends`` are the two (node, port) of that edge's ends."""
+
+    def __init__(self, message: str, ends: tuple[tuple[int, int], tuple[int, int]]) -> None:
+        super().__init__(message)
+        self.ends = ends
+
+
 class MapFormatError(ValueError):
     """A serialised map that cannot be read; the message names the field, node or edge."""
 
@@ -494,16 +503,25 @@ class TopoMap:
                 shift += k
             return n, shift % self._nodes[n].degree
 
-        def identify(x: int, y: int, k: int) -> bool:
-            """Port j of y is port j + k of x. True if this taught something new."""
+        def identify(x: int, y: int, k: int, ports: tuple[int, int] | None = None) -> bool:
+            """Port j of y is port j + k of x (``ports``: the port of each an edge made one
+            arrives by). True if this taught something new."""
             rx, sx = find(x)
             ry, sy = find(y)
             nx_, ny_ = self._nodes[rx], self._nodes[ry]
             if (nx_.kind, nx_.degree) != (ny_.kind, ny_.degree):
-                raise MapError(
+                why = (
                     f"merging {drop} into {keep} would make {ny_.kind} {y} (degree {ny_.degree})"
                     f" the same place as {nx_.kind} {x} (degree {nx_.degree})"
                 )
+                one_more = abs(nx_.degree - ny_.degree) == 1
+                if ports is not None and nx_.kind == ny_.kind == "meet" and one_more:
+                    ends = (
+                        (rx, (ports[0] + sx) % nx_.degree),
+                        (ry, (ports[1] + sy) % ny_.degree),
+                    )
+                    raise DegreeConflictError(why, ends)
+                raise MapError(why)
             rel = (k + sx - sy) % nx_.degree
             if alike is not None and rx != ry:
                 fits = rotations(
@@ -555,7 +573,7 @@ class TopoMap:
                             f"edge {e1} ({l1:.2f} m)",
                             (e1, e2),
                         )
-                    learnt |= identify(o1, o2, q1 - q2)
+                    learnt |= identify(o1, o2, q1 - q2, (q1, q2))
             if not learnt:
                 break
         # Edges sharing a slot are one edge; the oldest id of each group survives.
