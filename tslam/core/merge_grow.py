@@ -27,6 +27,8 @@ from tslam.core.topomap import TopoMap
 TAU = 2.0 * math.pi
 #: Nodes one merge may read again so: fig14 has two such pairs.
 MAX_GROWS = 2
+#: Two edges read as one departure read it between them, to within this.
+MERGED_SLACK_RAD = math.radians(10.0)
 
 #: node -> (its departures read again, its clearance, port p's edge moves to carry[p])
 Grows = dict[int, tuple[tuple[float, ...], float, dict[int, int]]]
@@ -116,7 +118,7 @@ def ports_in_place(
                 continue
             if merged is not None:
                 a, h1, h2 = low[merged] + turn, high[to[merged]], high[out]
-                if angdiff(a, h1) + angdiff(a, h2) > angdiff(h1, h2) + tol_rad:
+                if angdiff(a, h1) + angdiff(a, h2) > angdiff(h1, h2) + MERGED_SLACK_RAD:
                     continue
             score = (merged is not None, sum(errs))
             if best is None or score < best[0]:
