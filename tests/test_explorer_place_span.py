@@ -5,6 +5,7 @@ their clearances differ by no more than the points lie apart."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -180,7 +181,14 @@ def test_a_departure_not_held_from_a_place_is_tried_again_straight_across_it():
     ex.bounces[(c, port)] = 1
     assert ex._across_place(c, port) == pytest.approx(ex.tracer.p.depart_m + 0.37 + 0.2)
     assert ex._across_place(c, CORRIDOR.index(163)) == 0.0  # that one was held
-    ex.span[c] = 0.0  # read at one point only: no place to cross
+    # Read at one point only: no place to cross, unless the robot went out along another
+    # departure; then as if across a place ``retry_span_m`` wide (fig13 seeds 19 and 32: the
+    # 0.29 m pair's dead end given up, left from its west point).
+    ex.span[c] = 0.0
+    assert ex._across_place(c, port) == 0.0
+    ex._count_bounce((c, port), went_along_another=True)
+    assert ex._across_place(c, port) == pytest.approx(ex.tracer.p.depart_m + 0.3 + 0.2)
+    ex.p = replace(ex.p, retry_span_m=0.0)
     assert ex._across_place(c, port) == 0.0
     # The tracer goes on straight only on a departure it has just begun.
     tracer = ex.tracer
@@ -201,3 +209,16 @@ def test_fig16_seed_62_holds_the_indent_s_second_edge_when_tried_again_straight(
         rep = report(run, "fig16", 62, "paper")
         assert rep["finished"] and rep["false_merges"] == 0
         assert rep["complete"] is whole, rep
+
+
+def test_fig13_seed_19_holds_the_pair_s_dead_end_when_tried_again_straight():
+    """fig13's 0.29 m pair read at its west point alone: the dead end that leaves from its
+    east point was not held twice (the trace law took the east edge), and was given up.
+    Tried again straight across a place ``retry_span_m`` wide, it is held."""
+    for params, whole in ((None, True), (ExplorerParams(retry_span_m=0.0), False)):
+        run = explore("fig13", 19, "paper", duration_s=3000.0, progress=False, params=params)
+        rep = report(run, "fig13", 19, "paper")
+        assert rep["finished"] and rep["false_merges"] == 0
+        assert rep["complete"] is whole, rep
+        given_up = [n.text for n in run.explorer.notes if "given up, not held" in n.text]
+        assert bool(given_up) is not whole

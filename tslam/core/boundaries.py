@@ -85,7 +85,7 @@ class Boundaries(ExplorerState):
             if (off is not None and off <= p.boundary_same_m) or (
                 k == along and (off is None or off <= p.boundary_again_m)
             ):
-                self._count_bounce((f, j))
+                self._count_bounce((f, j), went_along_another=True)
                 self._note(
                     f"departure {j} of node {f} not held: went out by departure {k}, back at "
                     f"boundary {b}"

@@ -108,8 +108,9 @@ class ExplorerParams:
     # Leaving a place read at two points, go on straight along the departure across it and
     # this much beyond before tracing (``Explorer._across_place``; 0: trace at once).
     place_straight_m: float = 0.2
-    # ... and, tried again, from a node not known to be read at two points, as if across a
-    # place this wide (0: trace at once).
+    # ... and, tried again after the robot went out along another departure, from a node not
+    # known to be read at two points, as if across a place this wide (0: trace at once):
+    # fig13's 0.29 m pair, read at its west point, had its dead end given up (seeds 19, 32).
     retry_span_m: float = 0.3
     # An edge whose length is a walk's remainder is matched with this much more slack, until
     # a traversal measures it: fig12 seed 10 mapped a dead end at 1.17 m so and, back along

@@ -110,6 +110,7 @@ class ExplorerState:
         self.verified: set[int] = set()  # edges gone back along once the map had no frontier
         self.notes: list[Note] = []
         self.bounces: dict[tuple[int, int], int] = {}
+        self.went_along_another: set[tuple[int, int]] = set()  # ... not held so, once or more
         # Meet node -> how far apart two of its place's points were read (``_spans``).
         self.span: dict[int, float] = {}
         self._last_visit: tuple[int, tuple[float, ...], PortMap, float, float] | None = None
@@ -194,10 +195,12 @@ class ExplorerState:
             return None
         return best
 
-    def _count_bounce(self, key: tuple[int, int]) -> None:
+    def _count_bounce(self, key: tuple[int, int], went_along_another: bool = False) -> None:
         """One more time departure ``key`` was not held; after the retries an unexplored one
-        is given up."""
+        is given up. ``went_along_another``: the robot went out along another departure."""
         node, port = key
+        if went_along_another:
+            self.went_along_another.add(key)
         self.bounces[key] = self.bounces.get(key, 0) + 1
         if self.bounces[key] > self.p.bounce_retries and self.map.node(node).ports[port] is None:
             self.frozen.add(key)
@@ -231,6 +234,7 @@ class ExplorerState:
         kept = {(x, p) for x, p in self.frozen if x != node or p in carry}
         self.frozen = {(x, carry[p]) if x == node else (x, p) for x, p in kept}
         self.bounces = {k: v for k, v in self.bounces.items() if k[0] != node}
+        self.went_along_another = {k for k in self.went_along_another if k[0] != node}
 
     def _port_bearings_read(
         self, node: int, deps: Sequence[float], pm: PortMap

@@ -58,7 +58,7 @@ class Unhomed(ExplorerState):
         if len(found) != 1:
             return None
         ((w, k),) = found
-        self._count_bounce((f, j))
+        self._count_bounce((f, j), went_along_another=True)
         self._note(f"departure {j} of node {f} not held: went another way, recognised node {w}")
         self.partial_m = 0.0
         return w, k
