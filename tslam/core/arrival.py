@@ -657,14 +657,16 @@ class Arrival(ExplorerState):
         exclude: set[int],
         turn_ok: Callable[[int, int], bool],
     ) -> list[tuple[int, int, int]]:
-        """Old places the new ``node`` may be although the departure the robot came by is
-        explored there, by an edge whose length says one of the two went past a junction
-        without homing: (old node, rotation, the edge that went past). Longer than the
-        length just measured: the old edge went past ``f``, the meet point just left (fig13:
-        meet points 1 and 2 joined past meet point 0, which the robot then reached by its
-        third edge). Shorter: the edge just traced went past the old edge's far end. The
-        first tracing's look-alike is otherwise never a candidate, and the place is mapped
-        again, with copies of everything beyond it."""
+        """Old places a new node read as ``seen`` (arrived at by index ``a``, by ``edge`` if
+        mapped yet) may be although the departure the robot came by is explored there, by
+        an edge whose length says one of the two went past a junction without homing: (old
+        node, rotation, the edge that went past). Longer than the length just measured: the
+        old edge went past ``f``, the meet point just left (fig13: meet points 1 and 2 joined
+        past meet point 0, which the robot then reached by its third edge). Shorter: the
+        edge just traced went past the old edge's far end. The first tracing's look-alike is
+        otherwise never a candidate, and the place is mapped again, with copies of
+        everything beyond it. ``exclude``: nodes besides the fragment that are none;
+        ``turn_ok``: whether rotation k onto an old node fits dead reckoning's heading."""
         if length is None or self.map.node(f).kind != "meet":
             return []
         tol = self._tol()

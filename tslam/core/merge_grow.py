@@ -8,12 +8,13 @@ meet 32 (degree 4) the same place as meet 18 (degree 3)"), its fragment left a c
 
 So where a merge reaches two meet nodes by one edge it makes one, their degrees one apart,
 the node with fewer edges is read again as the other reads the place (``_grow``), and the
-merge is tried once more: each port of the node with fewer edges on a departure of its own
-of the other, every one agreeing in angle with the other's reading turned as the edge they
-are reached by is, that turn within dead reckoning's heading drift between the readings.
-The departure it lacked becomes unexplored, as a place read anew with an edge more does
-(``ExplorerParams.grow_place``). Not a node a live hypothesis names: its ports are what the
-hypothesis's rotation refers to.
+merge is tried once more. Each port of the node with fewer edges goes to a departure of its
+own of the other, the edge they are reached by to the edge's, the rest in the order of their
+bearings; every one agrees in angle under one turn within dead reckoning's heading drift
+between the two readings, but that one may be two edges read as one, lying between them
+(``ports_in_place``). The departure it lacked becomes unexplored, as a place read anew with
+an edge more does (``ExplorerParams.grow_place``). Not a node a live hypothesis names: its
+ports are what the hypothesis's rotation refers to; nor a stored map's.
 """
 
 from __future__ import annotations
@@ -29,9 +30,6 @@ TAU = 2.0 * math.pi
 MAX_GROWS = 2
 #: Two edges read as one departure read it between them, to within this.
 MERGED_SLACK_RAD = math.radians(10.0)
-
-#: node -> (its departures read again, its clearance, port p's edge moves to carry[p])
-Grows = dict[int, tuple[tuple[float, ...], float, dict[int, int]]]
 
 
 class MergeGrow(ExplorerState):

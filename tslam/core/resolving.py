@@ -460,7 +460,8 @@ class Resolving(MergeGrow):
         self.hyps.clear()
 
     def _view(self, h: Hypothesis) -> TopoMap:
-        """The map as ``h`` says it is: without the edges it found went past a junction."""
+        """The map as ``h`` says it is: without the edges it found went past a junction,
+        and with the nodes its merge reads with an edge more so (``Hypothesis.grows``)."""
         cuts = sorted(e for e in h.cuts if self.map.has_edge(e))
         if not cuts and not h.grows:
             return self.map
