@@ -12,6 +12,7 @@ from hal.interfaces import NOMAD200_LIMITS
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.localize import Hypothesis
 from tslam.core.merge_grow import ports_in_place
+from tslam.core.tracer import MeetPointReached
 
 TOL = math.radians(25.0)
 A_DEPS = [0, 100, 230]  # A: its departure 0 deg leads east, to the place
@@ -112,3 +113,47 @@ def test_a_reading_that_does_not_lie_in_the_place_is_not_read_again():
     ex.map.reread(p, _rad([150, 180, 315]), 1.5, {0: 0, 1: 1, 2: 2})
     assert ex._merge(h) == {}
     assert ex.map.node(p).degree == 3 and ex.map.has_node(q)
+
+
+# fig14 seed 1 without drift: the lab door's pair D mapped with three edges, the 0.29 m pair E
+# 3.85 m east of it with four. From F the robot went north through D unhomed and on east to
+# E, and read it with its four edges after 6.15 m.
+E_DEPS = [0, 90, 190, 300]
+D_DEPS = [126, 226, 336]  # three of E's, turned 36 degrees
+
+
+def _through_the_door(params: ExplorerParams | None = None) -> tuple[Explorer, int, int]:
+    """The map F, D - E, and the robot leaving F by its unexplored port 1."""
+    ex = Explorer(NOMAD200_LIMITS, params=params)
+    f = ex.map.add_meet(1.06, _rad(A_DEPS), (0.2, -2.8))
+    d = ex.map.add_meet(1.75, _rad(D_DEPS), (0.0, 0.0))
+    e = ex.map.add_meet(1.6, _rad(E_DEPS), (3.85, 0.0))
+    ex.map.connect(d, 2, e, 2, 3.85)
+    ex.leaving = (f, 1)
+    return ex, d, e
+
+
+def _arrive_at_e(ex: Explorer) -> int:
+    deps = _rad(E_DEPS)
+    a = deps.index(math.radians(190))
+    rel = tuple((x - deps[a]) % (2 * math.pi) for x in deps)
+    node, _ = ex._arrive(MeetPointReached(0.0, 3.9, 0.1, 1.6, 4, deps, a, rel, 6.15))
+    return node
+
+
+def test_a_reading_that_may_be_its_place_reached_past_a_junction_is_no_look_alike():
+    ex, d, e = _through_the_door()
+    node = _arrive_at_e(ex)
+    # The edge just traced went past D: that edge goes if the hypothesis is merged.
+    (new,) = [x.id for x in ex.map.edges() if node in (x.u, x.v)]
+    assert [(h.mapping, h.cuts) for h in ex.hyps.live] == [({node: (e, 0)}, {new})]
+    assert ex.map.node(node).degree == 4
+    assert not any(f"read as node {d}" in n.text for n in ex.notes)
+
+
+def test_without_the_rule_it_is_read_as_the_door_s_place_turned():
+    ex, d, _ = _through_the_door(ExplorerParams(look_alike_past=False))
+    node = _arrive_at_e(ex)
+    assert any(f"read as node {d}, which it looks like" in n.text for n in ex.notes)
+    assert all(h.mapping[node][0] == d for h in ex.hyps.live if node in h.mapping)
+    assert ex.map.node(node).degree == 3

@@ -641,10 +641,13 @@ class Arrival(ExplorerState):
         door's pair unhomed to the 0.29 m pair, read it with its four edges, and took it for
         the door's place mapped with three, turned 36 degrees; the place it was, reached
         past the door, was never tested, and it was mapped five times."""
-        if not (self.p.look_alike_past and self.p.past_candidates) or self._odo is None:
+        if not (self.p.look_alike_past and self.p.past_candidates):
             return False
-        at, deps = self._odo.distance_m, ev.departures_rad
-        turn_ok = lambda c, k: self._turn_fits(deps, at, c, k)  # noqa: E731
+        odo = self._odo
+
+        def turn_ok(c: int, k: int) -> bool:
+            return odo is None or self._turn_fits(ev.departures_rad, odo.distance_m, c, k)
+
         return bool(self._past_candidates(f, seen, a, None, length, set(), turn_ok))
 
     def _past_candidates(
