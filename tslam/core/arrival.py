@@ -639,7 +639,7 @@ class Arrival(ExplorerState):
         that went past a junction (``_past_candidates``). Then it is not read as a look-alike
         with an edge fewer instead: fig14 seed 1 without drift came east through the lab
         door's pair unhomed to the 0.29 m pair, read it with its four edges, and took it for
-        the door's place mapped with three, turned 36 degrees; the place it was, reached
+        the door's place mapped with three, turned some 30 degrees; the place it was, reached
         past the door, was never tested, and it was mapped five times."""
         if not (self.p.look_alike_past and self.p.past_candidates):
             return False

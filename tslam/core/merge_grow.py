@@ -2,7 +2,7 @@
 
 A close pair of meet points (section VII-B) is one junction to a sonar robot, but not every
 reading of it shows all its edges: fig14's two pairs (0.26 m by the lab door, 0.29 m by the
-east table) were read with three edges on one visit and four on another, and a proven
+east table) are read with three edges on one visit and four on another, and a proven
 hypothesis whose zipping reached the two readings was refused for their degrees ("would make
 meet 32 (degree 4) the same place as meet 18 (degree 3)"), its fragment left a copy for good.
 
@@ -93,9 +93,9 @@ def ports_in_place(
     high port); None if it does not. Both in order of bearing, so the ports keep their
     cyclic order with one of ``high``'s left out. Every port agrees in angle under one turn
     within ``bound_rad``, but that one of ``low``'s may be two of ``high``'s read as one,
-    lying between the one it goes to and the one left out, beside it (the 0.26 m pair by
-    fig14's lab door read from its north point: the south and east edges as one, between
-    the two). The fit with every port agreeing wins, then the one that agrees best."""
+    lying between the one it goes to and the one left out, beside it (the 0.29 m pair by
+    fig14's east table: its south and east edges read as one, between the two). The fit
+    with every port agreeing wins, then the one that agrees best."""
     dl, dh = len(low), len(high)
     if dh != dl + 1 or not (0 <= px < dl and 0 <= py < dh):
         return None
