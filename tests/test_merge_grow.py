@@ -158,3 +158,12 @@ def test_without_the_rule_it_is_read_as_the_door_s_place_turned():
     # Tested as the door's place only; the place it is, reached past the door, not at all.
     assert [h.mapping for h in ex.hyps.live] == [{node: (d, 0)}]
     assert ex.map.node(node).degree == 3
+
+
+def test_a_reading_worked_out_for_a_map_since_changed_is_left_out_of_its_view():
+    ex = Explorer(NOMAD200_LIMITS)
+    _, p, _, q, _, h = _copy_of_a_and_its_place(ex)
+    assert ex._cut_conflicts(h) is not None and set(h.grows) == {p}
+    assert ex._view(h).node(p).degree == 4
+    ex.map.remove_node(p)  # merged away since, say
+    assert not ex._view(h).has_node(p) and ex._view(h).has_node(q)

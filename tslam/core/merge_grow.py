@@ -71,7 +71,7 @@ class MergeGrow(ExplorerState):
     def _apply_grows(self, h: Hypothesis) -> None:
         """Read the nodes ``h``'s merge needed read again (``Hypothesis.grows``) so."""
         for n, (deps, clearance, carry) in sorted(h.grows.items()):
-            if not self.map.has_node(n):
+            if not self.map.has_node(n) or self.map.node(n).degree != len(carry):
                 continue
             was = self.map.node(n).degree
             if self.leaving is not None and self.leaving[0] == n:

@@ -467,7 +467,10 @@ class Resolving(MergeGrow):
             return self.map
         view = self.map.copy()
         for n, (deps, clearance, carry) in sorted(h.grows.items()):
-            view.reread(n, deps, clearance, carry)
+            # Worked out for the map as it stood at the merge's last try: a node since
+            # merged away or read again is left as it is.
+            if view.has_node(n) and view.node(n).degree == len(carry):
+                view.reread(n, deps, clearance, carry)
         for e in cuts:
             view.remove_edge(e)
         return view
