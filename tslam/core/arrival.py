@@ -5,7 +5,6 @@ the end of a known edge, a new node (and the old ones it may be), a node it boun
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 from tslam.core.explorer_state import MAX_CUTS, ExplorerState, Past, angdiff, nearest
 from tslam.core.localize import Hypothesis, Prediction, arrival_matches, candidates, predict
@@ -555,9 +554,9 @@ class Arrival(ExplorerState):
             self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd))
         slips: list[tuple[int, int, int]] = []
         if self.p.past_candidates:
-            sig = self.map.signature(node)
-            turn_ok = lambda c, k: self._heading_fits(node, c, k)  # noqa: E731
-            slips = self._past_candidates(f, sig, a, edge, length, {node}, turn_ok)
+            sig, deps = self.map.signature(node), self.map.node(node).departures_rad
+            read_at = self.born.get(node)
+            slips = self._past_candidates(f, sig, deps, read_at, a, edge, length, {node})
         slips = [(c, k, e) for c, k, e in slips if (c, k) not in implied]
         for c, k, e in slips:
             self.hyps.live.append(Hypothesis({node: (c, k)}, crowd=crowd, cuts={e}))
@@ -643,22 +642,20 @@ class Arrival(ExplorerState):
         past the door, was never tested, and it was mapped five times."""
         if not (self.p.look_alike_past and self.p.past_candidates):
             return False
-        odo = self._odo
-
-        def turn_ok(c: int, k: int) -> bool:
-            return odo is None or self._turn_fits(ev.departures_rad, odo.distance_m, c, k)
-
-        return bool(self._past_candidates(f, seen, a, None, length, set(), turn_ok))
+        read_at = None if self._odo is None else self._odo.distance_m
+        deps = ev.departures_rad
+        return bool(self._past_candidates(f, seen, deps, read_at, a, None, length, set()))
 
     def _past_candidates(
         self,
         f: int,
         seen: Signature,
+        deps: tuple[float, ...],
+        read_at: float | None,
         a: int,
         edge: int | None,
         length: float | None,
         exclude: set[int],
-        turn_ok: Callable[[int, int], bool],
     ) -> list[tuple[int, int, int]]:
         """Old places a new node read as ``seen`` (arrived at by index ``a``, by ``edge`` if
         mapped yet) may be although the departure the robot came by is explored there, by
@@ -668,8 +665,9 @@ class Arrival(ExplorerState):
         past meet point 0, which the robot then reached by its third edge). Shorter: the
         edge just traced went past the old edge's far end. The first tracing's look-alike is
         otherwise never a candidate, and the place is mapped again, with copies of
-        everything beyond it. ``exclude``: nodes besides the fragment that are none;
-        ``turn_ok``: whether rotation k onto an old node fits dead reckoning's heading."""
+        everything beyond it. ``deps``, read at encoder distance ``read_at`` (None: not by
+        the robot's encoders), must be turned from an old node's no further than dead
+        reckoning's heading drifts; ``exclude``: nodes besides the fragment that are none."""
         if length is None or self.map.node(f).kind != "meet":
             return []
         tol = self._tol()
@@ -678,7 +676,8 @@ class Arrival(ExplorerState):
         for c, k in alike:
             pa = (a + k) % self.map.node(c).degree
             e = self.map.node(c).ports[pa]
-            if e is None or e == edge or not turn_ok(c, k):
+            turned_ok = read_at is None or self._turn_fits(deps, read_at, c, k)
+            if e is None or e == edge or not turned_ok:
                 continue
             old = self.map.edge(e)
             slack = tol.length_slack(max(length, old.length_m))

@@ -45,12 +45,7 @@ class MergeGrow(ExplorerState):
         if view.node(x).degree > view.node(y).degree:
             (x, px), (y, py) = (y, py), (x, px)
         low, high = view.node(x), view.node(y)
-        if (
-            x in self.stored
-            or low.ambiguous_with
-            or self._in_hypotheses(x)
-            or high.degree != low.degree + 1
-        ):
+        if x in self.stored or low.ambiguous_with or self._in_hypotheses(x):
             return None
         tol = self._tol()
         if abs(low.clearance_m - high.clearance_m) > tol.clearance_m + self.p.place_hop_m / 2:
@@ -70,14 +65,25 @@ class MergeGrow(ExplorerState):
 
     def _apply_grows(self, h: Hypothesis) -> None:
         """Read the nodes ``h``'s merge needed read again (``Hypothesis.grows``) so."""
-        for n, (deps, clearance, carry) in sorted(h.grows.items()):
-            if not self.map.has_node(n) or self.map.node(n).degree != len(carry):
-                continue
+        for n, deps, clearance, carry in current_grows(self.map, h):
             was = self.map.node(n).degree
             if self.leaving is not None and self.leaving[0] == n:
                 self.leaving = (n, carry[self.leaving[1]])
             self._reread_node(n, deps, clearance, carry)
             self._note(f"node {n}, read with {was} edges, read as its place with {len(deps)}")
+
+
+def current_grows(
+    tmap: TopoMap, h: Hypothesis
+) -> list[tuple[int, tuple[float, ...], float, dict[int, int]]]:
+    """``h``'s readings again (``Hypothesis.grows``) that still fit ``tmap``: they were worked
+    out for the map as it stood at the merge's last try, and a node since merged away or
+    read again is left as it is."""
+    return [
+        (n, deps, clearance, carry)
+        for n, (deps, clearance, carry) in sorted(h.grows.items())
+        if tmap.has_node(n) and tmap.node(n).degree == len(carry)
+    ]
 
 
 def ports_in_place(

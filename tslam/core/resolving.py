@@ -12,7 +12,7 @@ import networkx as nx
 
 from tslam.core.explorer_state import MAX_CUTS
 from tslam.core.localize import Hypotheses, Hypothesis, separating_port
-from tslam.core.merge_grow import MAX_GROWS, MergeGrow
+from tslam.core.merge_grow import MAX_GROWS, MergeGrow, current_grows
 from tslam.core.placements import Placement, other_placements, placements
 from tslam.core.portmap import PortMap, turned_onto
 from tslam.core.topomap import DegreeConflictError, EdgeConflictError, MapError, TopoMap
@@ -466,11 +466,8 @@ class Resolving(MergeGrow):
         if not cuts and not h.grows:
             return self.map
         view = self.map.copy()
-        for n, (deps, clearance, carry) in sorted(h.grows.items()):
-            # Worked out for the map as it stood at the merge's last try: a node since
-            # merged away or read again is left as it is.
-            if view.has_node(n) and view.node(n).degree == len(carry):
-                view.reread(n, deps, clearance, carry)
+        for n, deps, clearance, carry in current_grows(view, h):
+            view.reread(n, deps, clearance, carry)
         for e in cuts:
             view.remove_edge(e)
         return view
