@@ -288,3 +288,8 @@ class ExplorerParams:
     # (paper drift, seeds 1-6) it completed the same runs, four of which then drove 2.5 to
     # 2.7 times the GVG's length instead of 2.2 to 2.3 (the target is 2.5).
     verify_edges: bool = False
+    # Shut in: nothing left to explore where the robot is, but departures left in pieces of
+    # the map it cannot reach. The GVG is connected, so a node here was read without an edge
+    # it has; go back to each meet node here once, to be read again from another way in
+    # (``Explorer._recheck_path``; False: the robot stops, as before stop 56).
+    recheck_shut_in: bool = True

@@ -108,6 +108,7 @@ class ExplorerState:
         self._at: tuple[MeetPointReached, int, PortMap] | None = None  # where held
         self.merges: list[MergeRecord] = []
         self.verified: set[int] = set()  # edges gone back along once the map had no frontier
+        self.rechecked: set[tuple[int, int]] = set()  # (node, port) come back by, shut in
         self.notes: list[Note] = []
         self.bounces: dict[tuple[int, int], int] = {}
         self.went_along_another: set[tuple[int, int]] = set()  # ... not held so, once or more
