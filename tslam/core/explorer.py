@@ -403,7 +403,7 @@ class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolvin
         GVG is connected, so a node here was read without an edge it has; come at from
         another side, the robot may home onto its place's other point or hear the obstacle
         it missed, and the node is read again with the edge (``grow_place``). office:2 seed
-        1 stopped after 1285 s with 14 of its places mapped: a room's junction by the door,
+        1 stopped after 1285 s with 10 of its 402 places mapped: a room's junction by the door,
         read from its lower point with the door's edge and a corner's as one, closed the
         room on itself. Each arrival is made once."""
         if not self.p.recheck_shut_in or not self.unexplored():

@@ -290,6 +290,6 @@ class ExplorerParams:
     verify_edges: bool = False
     # Shut in: nothing left to explore where the robot is, but departures left in pieces of
     # the map it cannot reach. The GVG is connected, so a node here was read without an edge
-    # it has; go back to each meet node here once, to be read again from another way in
+    # it has; come back to each meet node here by each of its edges once, to read it again
     # (``Explorer._recheck_path``; False: the robot stops, as before stop 56).
     recheck_shut_in: bool = True

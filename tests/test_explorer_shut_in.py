@@ -1,0 +1,104 @@
+"""Shut in: the piece of map the robot is in has nothing left to explore, but another piece
+has departures left. The GVG is connected, so some node here was read without an edge; the
+robot comes back to each meet node of its piece by each of its edges, to read it again,
+before it stops."""
+
+from __future__ import annotations
+
+import pytest
+
+from hal.interfaces import NOMAD200_LIMITS
+from tests.test_explorer_past import _add
+from tslam.core.explorer import Explorer, ExplorerParams
+from tslam.programs.sim_cmd import explore, report
+
+ROOM_DOOR = [0, 120, 240]  # the junction by the door, read without the door's edge
+ROOM_FAR = [60, 180, 300]
+
+
+def _shut_in(params: ExplorerParams | None = None) -> tuple[Explorer, int, int, int]:
+    """A room mapped as a closed piece (two junctions 4 m apart, two dead ends each) and,
+    out of reach, the corridor outside with a departure left. The robot stands at the door's
+    junction. Returns the explorer, the two room junctions and the corridor node."""
+    ex = Explorer(NOMAD200_LIMITS, params=params)
+    door = _add(ex, 1.5, ROOM_DOOR, 0.0)
+    far = _add(ex, 1.5, ROOM_FAR, 4.0)
+    ex.map.connect(door, 0, far, 1, 4.0)
+    for n, ports, x in ((door, (1, 2), 0.0), (far, (0, 2), 4.0)):
+        for p in ports:
+            b = ex.map.add_boundary(0.4, (x, 1.0))
+            ex.map.connect(n, p, b, 0, 1.2)
+    corridor = _add(ex, 1.0, [0, 90, 180], 0.0)
+    b = ex.map.add_boundary(0.4, (-1.0, 3.0))
+    ex.map.connect(corridor, 0, b, 0, 1.5)
+    return ex, door, far, corridor
+
+
+def test_shut_in_the_robot_goes_back_to_read_its_junctions_again():
+    ex, door, _, corridor = _shut_in()
+    assert ex.unexplored() == [(corridor, 1), (corridor, 2)]
+    port = ex._next_port(door, 0)
+    # The nearest arrival at a junction by an edge: back at this one from a dead end (2.4 m,
+    # against 4 m to the far junction).
+    assert port == 1
+    dead_end = ex.map.edge(ex.map.node(door).ports[1]).other_end(door, 1)[0]
+    ((step),) = ex.plan
+    assert (step.node, step.next_node, step.arrival_port) == (dead_end, door, 1)
+    assert ex.rechecked == {(door, 1)}
+    assert f"back to node {door} by edge" in ex.notes[-1].text
+
+
+def test_each_arrival_is_made_once_then_the_robot_stops():
+    ex, door, far, _ = _shut_in()
+    arrivals = set()
+    for _ in range(20):
+        path = ex._recheck_path(door)
+        if not path:
+            break
+        last = path[-1]
+        arrivals.add((last.next_node, last.arrival_port))
+        # The path ends by arriving at a room junction, along an edge of the room.
+        assert last.next_node in (door, far)
+    # Both junctions, by each of their three edges; never the corridor, out of reach.
+    assert arrivals == {(door, p) for p in range(3)} | {(far, p) for p in range(3)}
+    assert ex._recheck_path(door) == []
+    assert ex._next_port(door, 0) is None
+
+
+def test_with_nothing_left_anywhere_there_is_nothing_to_read_again():
+    ex, door, _, corridor = _shut_in()
+    (e,) = [e for e in ex.map.node(corridor).ports if e is not None]
+    b = ex.map.edge(e).other_end(corridor, 0)[0]
+    ex.map.remove_node(corridor)
+    ex.map.remove_node(b)
+    assert ex._recheck_path(door) == []
+    assert ex._next_port(door, 0) is None
+
+
+def test_the_switch_off_stops_the_robot_shut_in():
+    ex, door, _, _ = _shut_in(ExplorerParams(recheck_shut_in=False))
+    assert ex._next_port(door, 0) is None
+    assert ex.rechecked == set()
+
+
+@pytest.mark.parametrize("recheck", [True, False])
+def test_office_2_seed_1_room_closed_on_itself(recheck: bool):
+    """office:2 seed 1 at drift paper: lost in a room by its door, the robot mapped the room
+    again as a piece of its own, its door junction read from the lower of its two points
+    with three edges, and stopped at 1285 s, 'nothing left to explore from here', with 10 of
+    the building's 402 places mapped. Come back to that junction from the room's far
+    junction, it reads the door's edge; it goes out and maps on."""
+    params = ExplorerParams(recheck_shut_in=recheck)
+    run = explore("office:2", 1, "paper", 2000.0, progress=False, params=params)
+    texts = [n.text for n in run.explorer.notes]
+    rep = report(run, "office:2", 1, "paper")
+    if recheck:
+        assert not run.explorer.done
+        assert any("to read it again" in t for t in texts)
+        assert any(t.endswith("read again as its place, with 4 edges") for t in texts)
+        assert rep["found_places"] >= 16  # 20 of its 402 by 2000 s
+    else:
+        assert run.explorer.done
+        assert any(t.startswith("nothing left to explore from here:") for t in texts)
+        assert rep["found_places"] <= 12  # 10
+    assert rep["false_merges"] == 0
