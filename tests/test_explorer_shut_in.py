@@ -37,7 +37,7 @@ def _shut_in(params: ExplorerParams | None = None) -> tuple[Explorer, int, int, 
 def test_shut_in_the_robot_goes_back_to_read_its_junctions_again():
     ex, door, _, corridor = _shut_in()
     assert ex.unexplored() == [(corridor, 1), (corridor, 2)]
-    port = ex._next_port(door, 0)
+    port = ex._shut_in_port(door)
     # The nearest arrival at a junction by an edge: back at this one from a dead end (2.4 m,
     # against 4 m to the far junction).
     assert port == 1
@@ -62,7 +62,7 @@ def test_each_arrival_is_made_once_then_the_robot_stops():
     # Both junctions, by each of their three edges; never the corridor, out of reach.
     assert arrivals == {(door, p) for p in range(3)} | {(far, p) for p in range(3)}
     assert ex._recheck_path(door) == []
-    assert ex._next_port(door, 0) is None
+    assert ex._shut_in_port(door) is None
 
 
 def test_with_nothing_left_anywhere_there_is_nothing_to_read_again():
@@ -72,12 +72,12 @@ def test_with_nothing_left_anywhere_there_is_nothing_to_read_again():
     ex.map.remove_node(corridor)
     ex.map.remove_node(b)
     assert ex._recheck_path(door) == []
-    assert ex._next_port(door, 0) is None
+    assert ex._shut_in_port(door) is None
 
 
 def test_the_switch_off_stops_the_robot_shut_in():
     ex, door, _, _ = _shut_in(ExplorerParams(recheck_shut_in=False))
-    assert ex._next_port(door, 0) is None
+    assert ex._shut_in_port(door) is None
     assert ex.rechecked == set()
 
 

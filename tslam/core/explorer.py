@@ -271,6 +271,9 @@ class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolvin
             node, pm = self._stand(ev, node, pm, renamed)
             port = self._next_port(node, pm.arrival)
         if port is None:
+            # Only once no piece out of reach could be placed or dropped (they may be copies).
+            port = self._shut_in_port(node)
+        if port is None:
             self._hold(node)
             return ev.arrival_index or 0
         self._leave(node, port)
@@ -350,7 +353,7 @@ class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolvin
         if free:
             start = -1 if arrival is None else arrival
             return min(free, key=lambda p: (p - start - 1) % deg)
-        path = self._frontier_path(node) or self._verify_path(node) or self._recheck_path(node)
+        path = self._frontier_path(node) or self._verify_path(node)
         if not path:
             return None
         self.plan = path
@@ -396,6 +399,11 @@ class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolvin
         self._note(f"edge {e} traced once: back along it from node {start}")
         path = self.map.shortest_path(node, start) if start != node else []
         return [*path, Step(start, port, e, far, far_port)]
+    def _shut_in_port(self, node: int) -> int | None:
+        """The departure to take on the way to reading a node of this piece again
+        (``_recheck_path``), or None to stop."""
+        self.plan = self._recheck_path(node)
+        return self.plan.pop(0).port if self.plan else None
     def _recheck_path(self, node: int) -> list[Step]:
         """Shut in (nothing left to explore in the piece of map the robot is in, departures
         left in pieces it cannot reach): the graph path that arrives at a meet node of this
