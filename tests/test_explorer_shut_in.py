@@ -102,3 +102,65 @@ def test_office_2_seed_1_room_closed_on_itself(recheck: bool):
         assert any(t.startswith("nothing left to explore from here:") for t in texts)
         assert rep["found_places"] <= 12  # 10
     assert rep["false_merges"] == 0
+
+
+def _given_up_in_the_room(params: ExplorerParams | None = None) -> tuple[Explorer, int, int]:
+    """The room alone, the far junction's third dead end not held twice: given up. Returns
+    the explorer and the two junctions."""
+    ex, door, far, corridor = _shut_in(params)
+    dead_end = ex.map.edge(ex.map.node(corridor).ports[0]).other_end(corridor, 0)[0]
+    south = ex.map.edge(ex.map.node(far).ports[2]).other_end(far, 2)[0]
+    for n in (corridor, dead_end, south):
+        ex.map.remove_node(n)
+    ex.bounces[(far, 2)] = ex.p.bounce_retries + 1
+    ex.frozen.add((far, 2))
+    return ex, door, far
+
+
+def test_a_departure_given_up_is_tried_again_from_another_way_in():
+    ex, door, far = _given_up_in_the_room()
+    assert ex.unexplored() == []
+    port = ex._shut_in_port(door)
+    # The nearest way into the far junction: along the 4 m edge from here.
+    assert port == 0 and ex.plan == []
+    assert (far, 2) not in ex.frozen and ex.bounces[(far, 2)] == ex.p.bounce_retries
+    edge = ex.map.node(door).ports[0]
+    assert ex.notes[-1].text == (
+        f"departure(s) 2 of node {far} given up: back to it by edge {edge} to try again"
+    )
+    # Given up again, it is tried from the far junction's other way in, then no more.
+    ex.bounces[(far, 2)] += 1
+    ex.frozen.add((far, 2))
+    path = ex._retry_path(door)
+    assert (path[-1].next_node, path[-1].arrival_port) == (far, 0)
+    ex.bounces[(far, 2)] += 1
+    ex.frozen.add((far, 2))
+    assert ex._retry_path(door) == []
+    assert ex._shut_in_port(door) is None
+
+
+def test_the_switch_off_leaves_a_departure_given_up():
+    ex, door, far = _given_up_in_the_room(ExplorerParams(retry_given_up=False))
+    assert ex._shut_in_port(door) is None
+    assert (far, 2) in ex.frozen
+
+
+@pytest.mark.parametrize("retry", [True, False])
+def test_fig16_seed_68_the_corridor_south_tried_again_from_the_north(retry: bool):
+    """fig16 seed 68 at drift paper: back from the indent's dead end each time, the robot
+    homed onto the indent's weak meet point, and leaving from there for the corridor south
+    went into the dead end again, twice for each of two departures. It called exploration
+    complete with two of the three places. Come back from the north, it homes onto the
+    corridor's point and goes south."""
+    run = explore(
+        "fig16", 68, "paper", 1500.0, progress=False, params=ExplorerParams(retry_given_up=retry)
+    )
+    rep = report(run, "fig16", 68, "paper")
+    texts = [n.text for n in run.explorer.notes]
+    assert run.explorer.done
+    assert rep["false_merges"] == 0
+    if retry:
+        assert any(t.endswith("given up: back to it by edge 2 to try again") for t in texts)
+        assert rep["complete"]
+    else:
+        assert not rep["complete"] and rep["found_places"] == 2

@@ -56,6 +56,7 @@ from tslam.core.place_pair import PlacePair
 from tslam.core.portmap import PortMap
 from tslam.core.predicted_place import PredictedPlace
 from tslam.core.resolving import Resolving
+from tslam.core.shut_in import ShutIn
 from tslam.core.topomap import MapError, Step
 from tslam.core.tracer import Behaviour, BoundaryReached, Event, MeetPointReached
 from tslam.core.unhomed import Unhomed
@@ -72,7 +73,9 @@ class Mode(enum.Enum):
     DONE = "done"
 
 
-class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolving, HeadingBounds):
+class Explorer(
+    Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolving, HeadingBounds, ShutIn
+):
     """``step`` once per control cycle, like the tracer; read ``map``, ``mode``, ``notes``."""
 
     @property
@@ -399,50 +402,6 @@ class Explorer(Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolvin
         self._note(f"edge {e} traced once: back along it from node {start}")
         path = self.map.shortest_path(node, start) if start != node else []
         return [*path, Step(start, port, e, far, far_port)]
-    def _shut_in_port(self, node: int) -> int | None:
-        """The departure to take on the way to reading a node of this piece again
-        (``_recheck_path``), or None to stop."""
-        self.plan = self._recheck_path(node)
-        return self.plan.pop(0).port if self.plan else None
-    def _recheck_path(self, node: int) -> list[Step]:
-        """Shut in (nothing left to explore in the piece of map the robot is in, departures
-        left in pieces it cannot reach): the graph path that arrives at a meet node of this
-        piece by an edge it has not been sent in by yet, the nearest such arrival first. The
-        GVG is connected, so a node here was read without an edge it has; come at from
-        another side, the robot may home onto its place's other point or hear the obstacle
-        it missed, and the node is read again with the edge (``grow_place``). office:2 seed
-        1 stopped after 1285 s with 10 of its 402 places mapped: a room's junction by the door,
-        read from its lower point with the door's edge and a corner's as one, closed the
-        room on itself. Each arrival is made once."""
-        if not self.p.recheck_shut_in or not self.unexplored():
-            return []
-        dist = self._distances(node)
-        best: tuple[float, int, int] | None = None
-        for e in self.map.edges():
-            for n, q in ((e.u, e.port_u), (e.v, e.port_v)):
-                w = e.v if n == e.u else e.u
-                if self.map.node(n).kind != "meet" or (n, q) in self.rechecked or w not in dist:
-                    continue
-                if best is None or (dist[w] + e.length_m, e.id, n) < best:
-                    best = (dist[w] + e.length_m, e.id, n)
-        if best is None:
-            return []
-        _, e, n = best
-        edge = self.map.edge(e)
-        q = edge.port_u if edge.u == n else edge.port_v
-        w, p = edge.other_end(n, q)
-        self.rechecked.add((n, q))
-        self._note(
-            f"nothing left to explore from here, {len(self.unexplored())} departure(s) left in "
-            f"pieces out of reach: back to node {n} by edge {e} to read it again"
-        )
-        path = self.map.shortest_path(node, w) if w != node else []
-        return [*path, Step(w, p, e, n, q)]
-    def _distances(self, node: int) -> dict[int, float]:
-        """Graph distance from ``node`` to every node it reaches, by the shortest edges."""
-        return nx.single_source_dijkstra_path_length(
-            self.map.graph, node, weight=lambda u, v, d: min(x["length_m"] for x in d.values())
-        )
     def _frontier_path(self, node: int) -> list[Step]:
         """The graph path to the nearest node with a departure left to explore."""
         todo = {n for n, _ in self.unexplored()}

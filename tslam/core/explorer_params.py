@@ -291,5 +291,8 @@ class ExplorerParams:
     # Shut in: nothing left to explore where the robot is, but departures left in pieces of
     # the map it cannot reach. The GVG is connected, so a node here was read without an edge
     # it has; come back to each meet node here by each of its edges once, to read it again
-    # (``Explorer._recheck_path``; False: the robot stops, as before stop 56).
+    # (``ShutIn._recheck_path``; False: the robot stops, as before stop 56).
     recheck_shut_in: bool = True
+    # ... and with nothing left to explore anywhere, a departure given up is tried once more
+    # from each other way into its node (``ShutIn._retry_path``; False: exploration ends).
+    retry_given_up: bool = True

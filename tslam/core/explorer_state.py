@@ -13,6 +13,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import NamedTuple
 
+import networkx as nx
+
 from hal.interfaces import DriveLimits
 from hal.types import Odometry
 from tslam.core.edgepaths import EdgePaths
@@ -108,7 +110,9 @@ class ExplorerState:
         self._at: tuple[MeetPointReached, int, PortMap] | None = None  # where held
         self.merges: list[MergeRecord] = []
         self.verified: set[int] = set()  # edges gone back along once the map had no frontier
-        self.rechecked: set[tuple[int, int]] = set()  # (node, port) come back by, shut in
+        # (node, port) the robot was sent back to a node by, shut in or to retry a departure
+        # given up (shut_in.py).
+        self.rechecked: set[tuple[int, int]] = set()
         self.notes: list[Note] = []
         self.bounces: dict[tuple[int, int], int] = {}
         self.went_along_another: set[tuple[int, int]] = set()  # ... not held so, once or more
@@ -175,6 +179,12 @@ class ExplorerState:
         if not self.hyps.live:
             return frozenset()
         return frozenset(n for n in self.hyps.fragment if self.map.has_node(n))
+
+    def _distances(self, node: int) -> dict[int, float]:
+        """Graph distance from ``node`` to every node it reaches, by the shortest edges."""
+        return nx.single_source_dijkstra_path_length(
+            self.map.graph, node, weight=lambda u, v, d: min(x["length_m"] for x in d.values())
+        )
 
     def unexplored(self) -> list[tuple[int, int]]:
         """Departures still to explore (those frozen by an ambiguity are left out)."""
