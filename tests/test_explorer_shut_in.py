@@ -8,7 +8,8 @@ from __future__ import annotations
 import pytest
 
 from hal.interfaces import NOMAD200_LIMITS
-from tests.test_explorer_past import _add
+from hal.types import Odometry
+from tests.test_explorer_past import _add, meet
 from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.programs.sim_cmd import explore, report
 
@@ -73,6 +74,16 @@ def test_with_nothing_left_anywhere_there_is_nothing_to_read_again():
     ex.map.remove_node(b)
     assert ex._recheck_path(door) == []
     assert ex._shut_in_port(door) is None
+
+
+def test_a_robot_sent_to_a_node_holds_there_shut_in_or_not():
+    ex, door, far, _ = _shut_in()
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    ex.leaving, ex.goal = (far, 1), door  # an operator's goto, on its last edge
+    ex._choose(meet(0.0, 0.0, ROOM_DOOR, 0, 4.0, 1.5))
+    assert ex.held and not ex.done and ex.goal is None
+    assert [n.text for n in ex.notes] == [f"at node {door}, as ordered: holding"]
+    assert ex.rechecked == set()
 
 
 def test_the_switch_off_stops_the_robot_shut_in():

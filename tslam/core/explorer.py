@@ -273,8 +273,9 @@ class Explorer(
                 break
             node, pm = self._stand(ev, node, pm, renamed)
             port = self._next_port(node, pm.arrival)
-        if port is None:
-            # Only once no piece out of reach could be placed or dropped (they may be copies).
+        if port is None and self.goal is None:
+            # Only once no piece out of reach could be placed or dropped (they may be copies),
+            # and not at a node an operator sent the robot to.
             port = self._shut_in_port(node)
         if port is None:
             self._hold(node)
