@@ -66,6 +66,21 @@ def test_each_arrival_is_made_once_then_the_robot_stops():
     assert ex._shut_in_port(door) is None
 
 
+def test_a_loop_back_to_the_same_node_is_come_back_by_at_each_end():
+    ex = Explorer(NOMAD200_LIMITS)
+    x = _add(ex, 1.5, ROOM_DOOR, 0.0)
+    ex.map.connect(x, 0, x, 1, 6.0)  # round a pillar and back
+    ex.map.connect(x, 2, ex.map.add_boundary(0.4, (0.0, -1.0)), 0, 1.2)
+    _add(ex, 1.0, [0, 90, 180], 20.0)  # a piece out of reach, unexplored
+    arrivals = []
+    while path := ex._recheck_path(x):
+        last = path[-1]
+        far = ex.map.edge(last.edge).other_end(last.node, last.port)
+        assert far == (last.next_node, last.arrival_port)  # each step as the map has it
+        arrivals.append(far)
+    assert sorted(arrivals) == [(x, 0), (x, 1), (x, 2)]
+
+
 def test_with_nothing_left_anywhere_there_is_nothing_to_read_again():
     ex, door, _, corridor = _shut_in()
     (e,) = [e for e in ex.map.node(corridor).ports if e is not None]

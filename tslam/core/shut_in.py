@@ -80,22 +80,20 @@ class ShutIn(ExplorerState):
         """The nearest arrival from ``node`` at a meet node (of ``among``, if given) by an
         edge the robot has not been sent back in by: that node, the edge, and the way."""
         dist = self._distances(node)
-        best: tuple[float, int, int] | None = None
+        best: tuple[float, int, int, int] | None = None
         for e in self.map.edges():
             for n, q in ((e.u, e.port_u), (e.v, e.port_v)):
-                w = e.v if n == e.u else e.u
+                w = e.other_end(n, q)[0]
                 if self.map.node(n).kind != "meet" or (n, q) in self.rechecked or w not in dist:
                     continue
                 if among is not None and n not in among:
                     continue
-                if best is None or (dist[w] + e.length_m, e.id, n) < best:
-                    best = (dist[w] + e.length_m, e.id, n)
+                if best is None or (dist[w] + e.length_m, e.id, n, q) < best:
+                    best = (dist[w] + e.length_m, e.id, n, q)
         if best is None:
             return None
-        _, e, n = best
-        edge = self.map.edge(e)
-        q = edge.port_u if edge.u == n else edge.port_v
-        w, p = edge.other_end(n, q)
+        _, e, n, q = best
+        w, p = self.map.edge(e).other_end(n, q)
         self.rechecked.add((n, q))
         path = self.map.shortest_path(node, w) if w != node else []
         return n, e, [*path, Step(w, p, e, n, q)]
