@@ -624,16 +624,30 @@ class Resolving(MergeGrow):
                 return e, gap
         return None
 
+    def _renamed_port(
+        self, renamed: dict[int, tuple[int, int]], x: tuple[int, int]
+    ) -> tuple[int, int]:
+        """(node, port) ``x`` after a merge's renames."""
+        n, p = x
+        if n not in renamed:
+            return x
+        r, shift = renamed[n]
+        return r, (p + shift) % self.map.node(r).degree
+
     def _apply_renames(self, renamed: dict[int, tuple[int, int]]) -> None:
         if self.leaving is not None and self.leaving[0] in renamed:
             r, s = renamed[self.leaving[0]]
             self.leaving = (r, (self.leaving[1] + s) % self.map.node(r).degree)
-        self.frozen = {
-            (renamed[n][0], (p + renamed[n][1]) % self.map.node(renamed[n][0]).degree)
-            if n in renamed
-            else (n, p)
-            for n, p in self.frozen
-        }
+        self.frozen = {self._renamed_port(renamed, x) for x in self.frozen}
+        # What was tried at a port goes with it: a departure given up before its node was
+        # merged is still given up, and retried as such (shut_in.py).
+        self.rechecked = {self._renamed_port(renamed, x) for x in self.rechecked}
+        self.went_along_another = {self._renamed_port(renamed, x) for x in self.went_along_another}
+        bounces: dict[tuple[int, int], int] = {}
+        for x, k in self.bounces.items():
+            y = self._renamed_port(renamed, x)
+            bounces[y] = max(k, bounces.get(y, 0))
+        self.bounces = bounces
         if self.goal in renamed:
             self.goal = renamed[self.goal][0]
         self.plan = []
