@@ -193,3 +193,23 @@ def test_fig16_seed_68_the_corridor_south_tried_again_from_the_north(retry: bool
         assert rep["complete"]
     else:
         assert not rep["complete"] and rep["found_places"] == 2
+
+
+def test_a_departure_given_up_stays_given_up_when_its_node_is_merged():
+    """A merge renames node 9 to the kept node, its port p to port p + 1: what was tried at
+    each port goes with it. Before stop 56 only ``frozen`` did, and the departure read as
+    left by an ambiguity, never retried as one given up."""
+    ex = Explorer(NOMAD200_LIMITS)
+    kept = _add(ex, 1.5, ROOM_FAR, 0.0)
+    ex.bounces[(9, 2)] = ex.p.bounce_retries + 1
+    ex.frozen.add((9, 2))
+    ex.went_along_another.add((9, 2))
+    ex.rechecked.add((9, 0))
+    ex._apply_renames({9: (kept, 1)})
+    assert ex.frozen == ex.went_along_another == {(kept, 0)}
+    assert ex.bounces == {(kept, 0): ex.p.bounce_retries + 1}
+    assert ex.rechecked == {(kept, 1)}
+    assert (
+        ex._left_out()
+        == f"; 1 departure(s) given up, not held when tried (node:departure {kept}:0)"
+    )
