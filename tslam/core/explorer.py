@@ -200,7 +200,7 @@ class Explorer(
         out = sorted(x for x in self.map.unexplored() if x in self.frozen)
         if not out:
             return ""
-        given_up = [x for x in out if self.bounces.get(x, 0) > self.p.bounce_retries]
+        given_up = self._given_up()
         parts = [f"{len(given_up)} departure(s) given up, not held when tried"] if given_up else []
         if len(out) > len(given_up):
             parts.append(f"{len(out) - len(given_up)} left by an ambiguity")

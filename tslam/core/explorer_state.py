@@ -186,6 +186,14 @@ class ExplorerState:
             self.map.graph, node, weight=lambda u, v, d: min(x["length_m"] for x in d.values())
         )
 
+    def _given_up(self) -> list[tuple[int, int]]:
+        """Unexplored departures given up: frozen after ``bounce_retries`` tries not held."""
+        return [
+            x
+            for x in self.map.unexplored()
+            if x in self.frozen and self.bounces.get(x, 0) > self.p.bounce_retries
+        ]
+
     def unexplored(self) -> list[tuple[int, int]]:
         """Departures still to explore (those frozen by an ambiguity are left out)."""
         return [x for x in self.map.unexplored() if x not in self.frozen]

@@ -635,9 +635,8 @@ class Resolving(MergeGrow):
         return r, (p + shift) % self.map.node(r).degree
 
     def _apply_renames(self, renamed: dict[int, tuple[int, int]]) -> None:
-        if self.leaving is not None and self.leaving[0] in renamed:
-            r, s = renamed[self.leaving[0]]
-            self.leaving = (r, (self.leaving[1] + s) % self.map.node(r).degree)
+        if self.leaving is not None:
+            self.leaving = self._renamed_port(renamed, self.leaving)
         self.frozen = {self._renamed_port(renamed, x) for x in self.frozen}
         # What was tried at a port goes with it: a departure given up before its node was
         # merged is still given up, and retried as such (shut_in.py).

@@ -55,11 +55,7 @@ class ShutIn(ExplorerState):
         the dead end again: it called exploration complete with two of the three places."""
         if not self.p.retry_given_up:
             return []
-        given_up = {
-            (n, p)
-            for n, p in self.map.unexplored()
-            if (n, p) in self.frozen and self.bounces.get((n, p), 0) > self.p.bounce_retries
-        }
+        given_up = self._given_up()
         if not given_up:
             return []
         found = self._arrival(node, {n for n, _ in given_up})
