@@ -563,6 +563,8 @@ class Arrival(ExplorerState):
         if fresh or slips:
             self.hyps.fragment.add(node)
         leads = self._lead_ins(f, j, node, a, length) if self.p.lead_ins else []
+        if self.p.place_lead_ins:
+            leads += self._place_lead_ins(f, j, node, a, length)
         leads = [h for h in leads if h.mapping[node] not in implied]
         for h in leads:
             self.hyps.live.append(h)

@@ -52,6 +52,7 @@ from tslam.core.arrival import Arrival
 from tslam.core.boundaries import Boundaries
 from tslam.core.explorer_params import ExplorerParams
 from tslam.core.heading_bounds import HeadingBounds
+from tslam.core.place_lead_ins import PlaceLeadIns
 from tslam.core.place_pair import PlacePair
 from tslam.core.portmap import PortMap
 from tslam.core.predicted_place import PredictedPlace
@@ -74,7 +75,15 @@ class Mode(enum.Enum):
 
 
 class Explorer(
-    Arrival, PredictedPlace, PlacePair, Unhomed, Boundaries, Resolving, HeadingBounds, ShutIn
+    Arrival,
+    PredictedPlace,
+    PlacePair,
+    PlaceLeadIns,
+    Unhomed,
+    Boundaries,
+    Resolving,
+    HeadingBounds,
+    ShutIn,
 ):
     """``step`` once per control cycle, like the tracer; read ``map``, ``mode``, ``notes``."""
 

@@ -230,6 +230,9 @@ class ExplorerParams:
     # A new node reached from a node that may be a copy of an old one is tested as the old
     # place that edge leads to (``Explorer._lead_ins``).
     lead_ins: bool = True
+    # ... and so is one reached from a node that may be an old place read with an edge more or
+    # fewer (place_lead_ins.py).
+    place_lead_ins: bool = True
     # A rival hypothesis that a proven one's merge makes true as well does not block it
     # (``Explorer._fold_implied``).
     fold_implied: bool = True
