@@ -9,9 +9,10 @@ first node, came back up from the door at 887 s, read it with four, and mapped i
 the east table's pair, reached from the copy 3.87 m on, went in again as well (the old pair
 node's edge of 3.86 m to it was explored), and the copies multiplied from there.
 
-So a new node reached from such a node ``f`` (its reading one edge more or fewer than an old
-node ``g``'s, the rest agreeing in angle under a turn within dead reckoning's heading drift,
-as ``ports_in_place`` reads it) is also tested as the place ``g``'s edge that way leads to.
+So a new node reached from such a node ``f`` (like no other node as read, and one edge more
+or fewer than an old node ``g``'s, the rest agreeing in angle under a turn within dead
+reckoning's heading drift, as ``ports_in_place`` reads it) is also tested as the place
+``g``'s edge that way leads to.
 The hypothesis names the new node only: ``f`` and ``g`` differ in degree, so no rotation
 makes one the other; the merge's zipping reaches them by the edge it makes one, and reads
 the node with fewer edges again as its place (``MergeGrow``). As for a lead-in, the edge just
@@ -21,7 +22,7 @@ traced counts for nothing: the merge needs the usual proof from edges still to c
 from __future__ import annotations
 
 from tslam.core.explorer_state import ExplorerState
-from tslam.core.localize import Hypothesis, Prediction, arrival_matches
+from tslam.core.localize import Hypothesis, Prediction, arrival_matches, candidates
 from tslam.core.merge_grow import ports_in_place
 
 
@@ -38,6 +39,12 @@ class PlaceLeadIns(ExplorerState):
         if fn.kind != "meet" or f not in self.born or node not in self.born:
             return []
         tol = self._tol()
+        if candidates(self.map, self.map.signature(f), tol, {f}, None):
+            # A reading like some other place's is no misread: in fig15, where junctions of
+            # three edges and of four stand alike along the walls and between the blocks,
+            # every node looked like some place read with an edge more or fewer, and the
+            # ambiguity, reported at 959 s without these lead-ins, waited until 1433 s.
+            return []
         seen = self.map.signature(node)
         taken = self.hyps.fragment | {f, node}
         found: set[tuple[int, int]] = set()
