@@ -134,7 +134,6 @@ class Sweep:
         vertex: bool = False,
         recess: bool = False,
         agree: bool = False,
-        short_doubt_m: float | None = None,
     ) -> list[Obstacle]:
         """The obstacles seen, in the frame of a robot heading ``heading_rad``; the options
         as for ``sweep_minima``."""
@@ -150,7 +149,6 @@ class Sweep:
             vertex=vertex,
             recess=recess,
             agree=agree,
-            short_doubt_m=short_doubt_m,
         )
 
 
@@ -170,7 +168,6 @@ def sweep_minima(
     vertex: bool = False,
     recess: bool = False,
     agree: bool = False,
-    short_doubt_m: float | None = None,
 ) -> list[Obstacle]:
     """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
 
@@ -192,9 +189,7 @@ def sweep_minima(
     would make (``_bend_vertex``) and a shallow bend's (``SHALLOW_BEND_RATIO``). With
     ``recess`` a plateau that borders a lower run is still an obstacle if it is wide and
     framed by two nearer obstacles (``_recessed``). With ``agree`` a view between two runs
-    is deeper readings that see about as far. With ``short_doubt_m`` (and ``doubts``) a run
-    one reading short of counting, no further than that beyond the nearest run, is a doubt
-    too (``_short_doubts``).
+    is deeper readings that see about as far.
 
     A sweep of more than ``DENSE_READINGS`` readings (a ring that fires fast) is read as the
     medians of ``DENSE_BINS`` sectors, with ``shallow`` on and ``recess`` and ``agree`` off.
@@ -232,7 +227,6 @@ def sweep_minima(
     fewest = max(min_samples, math.ceil(min_run_rad * n / (2 * math.pi)))
     runs: list[tuple[float, float, int, int]] = []  # distance, mid bearing, lo, hi
     short: list[tuple[int, float]] = []  # runs too short to count: seed reading, limit
-    nearly: list[tuple[float, float, np.ndarray]] = []  # one short: distance, bearing, readings
     counted: list[int] = []  # the run ids in ``runs``
     for run_id, i in enumerate(np.argsort(d, kind="stable")):
         if not math.isfinite(d[i]):
@@ -250,9 +244,6 @@ def sweep_minima(
             # random, so its runs hold several samples, but only a few degrees' worth.
             if not slope and len(member) < fewest:
                 short.append((int(i), limit))
-                if len(member) == fewest - 1:
-                    dist, mid, _, _ = _run(b, d, idx, member, lo, hi)
-                    nearly.append((dist, mid, idx))
             continue
         runs.append(_run(b, d, idx, member, lo, hi))
         counted.append(run_id)
@@ -268,8 +259,6 @@ def sweep_minima(
         runs += [r for r, slope in _joined(b, d, open_, short, fewest) if not slope]
     if not runs:
         return []
-    if short_doubt_m is not None and doubts is not None:
-        doubts += _short_doubts(nearly, runs, n, short_doubt_m)
     # Neighbouring runs on one bent wall join, in chains (a side-lobe fragment, the wall,
     # the next face of the bend); the nearest run of a chain stands for it. A recess's back
     # wall joins neither neighbour: fig16's indent read as one wall round its two corners.
@@ -318,29 +307,6 @@ def sweep_minima(
         ux, uy = math.cos(mid), math.sin(mid)
         out.append(Obstacle(dist, ux * dist, uy * dist, -ux, -uy, math.atan2(uy, ux)))
     return out
-
-
-def _short_doubts(
-    nearly: list[tuple[float, float, np.ndarray]],
-    runs: list[tuple[float, float, int, int]],
-    n: int,
-    within_m: float,
-) -> list[float]:
-    """The bearings of runs one reading short of counting (``nearly``) that lie no further
-    than ``within_m`` beyond the nearest of ``runs`` and that no run took in: maybe an
-    obstacle of the meet point itself, cut short by one outlier or dropout. At fig14's lab
-    door the junction inside read one of its jambs, or the table's corner, on two readings
-    with a stray echo or no echo beside them in 10 of 45 sweeps, and mapped a place of four
-    edges with three. Another turn of the turret puts more readings on it."""
-    nearest = min(r[0] for r in runs)
-    taken = np.zeros(n, dtype=bool)
-    for _, _, lo, hi in runs:
-        taken[[k % n for k in range(lo, hi + 1 if hi >= lo else hi + n + 1)]] = True
-    return [
-        mid
-        for dist, mid, idx in nearly
-        if dist <= nearest + within_m and not taken[idx].any()
-    ]
 
 
 def _width(run: tuple[float, float, int, int], n: int) -> int:

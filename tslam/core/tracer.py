@@ -169,11 +169,6 @@ class TracerParams:
     # strays at unlike ranges are no view (sweep.py). fig12's cut corner read as a meet point
     # so in seeds 29 and 76; seeds 1-120 complete 357 of 600 against 350 (README, stop 52).
     sweep_view_agree: bool = True
-    # ``short_doubt``: a run of the sweep one reading short of counting, about as near as the
-    # nearest obstacle and taken into no run, makes the sweep doubtful, and the turret turns
-    # once more (sweep.py, ``_short_doubts``): an outlier or a dropout beside a door jamb
-    # left fig14's junction inside the lab door a place of three edges in 10 of 45 arrivals.
-    sweep_short_doubt: bool = False
     place_corners: bool = True
     sensing: SensingParams = field(default_factory=SensingParams)
     boundary_clearance_m: float = 0.45  # the edge has run into its corner ...
@@ -792,7 +787,6 @@ class Tracer:
             vertex=p.sweep_vertex,
             recess=p.sweep_recess,
             agree=p.sweep_view_agree,
-            short_doubt_m=p.degree_tol_m if p.sweep_short_doubt else None,
         )
         if doubts and p.sweep_again and not s.swept_again:
             # One deeper reading between two walls: a stray echo, or a doorway too narrow
