@@ -6,9 +6,10 @@ from __future__ import annotations
 import math
 
 from hal.interfaces import NOMAD200_LIMITS
-from tslam.core.explorer import Explorer
+from tslam.core.explorer import Explorer, ExplorerParams
 from tslam.core.place_lead_ins import same_port
 from tslam.core.topomap import TopoMap
+from tslam.programs.sim_cmd import explore, report
 
 # fig14 seed 1: the lab's 0.26 m pair by the south door, read as the first node with three
 # edges and, 887 s later, come back to from the door, with four (odometry frame, radians).
@@ -80,3 +81,17 @@ def test_none_from_a_node_that_looks_like_another_as_read():
     ex, n = _pair_map()
     ex.map.add_meet(1.7, tuple(x + 0.1 for x in FOUR), (20.0, 0.0))
     assert ex._place_lead_ins(n["f"], 0, n["node"], 2, 3.87) == []
+
+
+def test_fig13_seed_25_completes_with_place_lead_ins_and_not_without():
+    # Without them the robot finished at 851 s with nine of the lab's ten places.
+    runs = {}
+    for on in (True, False):
+        params = ExplorerParams(place_lead_ins=on)
+        runs[on] = explore("fig13", 25, "paper", duration_s=1500.0, progress=False, params=params)
+    rep = report(runs[True], "fig13", 25, "paper")
+    assert rep["complete"] and rep["false_merges"] == 0
+    notes = [n.text for n in runs[True].explorer.notes]
+    assert any("is a place read anew" in t for t in notes)
+    without = report(runs[False], "fig13", 25, "paper")
+    assert not without["complete"] and without["false_merges"] == 0

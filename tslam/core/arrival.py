@@ -563,17 +563,18 @@ class Arrival(ExplorerState):
         if fresh or slips:
             self.hyps.fragment.add(node)
         leads = self._lead_ins(f, j, node, a, length) if self.p.lead_ins else []
-        if self.p.place_lead_ins:
-            leads += self._place_lead_ins(f, j, node, a, length)
         leads = [h for h in leads if h.mapping[node] not in implied]
-        for h in leads:
+        reread = self._place_lead_ins(f, j, node, a, length) if self.p.place_lead_ins else []
+        reread = [h for h in reread if h.mapping[node] not in implied]
+        for h in leads + reread:
             self.hyps.live.append(h)
             self.hyps.fragment.add(node)
-        if dropped or fresh or leads or slips:
+        if dropped or fresh or leads or reread or slips:
             self._note(
                 f"node {node}: {len(fresh)} look-alike(s), "
                 + (f"{len(slips)} if an edge went past a junction, " if slips else "")
                 + (f"{len(leads)} if node {f} is mapped twice, " if leads else "")
+                + (f"{len(reread)} if node {f} is a place read anew, " if reread else "")
                 + f"{dropped} hypothesis(es) refuted, {len(self.hyps.live)} open"
             )
         self.partial_m = 0.0
