@@ -191,7 +191,7 @@ class TracerParams:
     sides_cycles: int = 5  # ... seen so in this many control cycles running
     sides_along_rad: float = math.radians(45.0)  # ... their edge this close to the way
     sides_ahead_rad: float = math.radians(15.0)  # ... neither this close to it (0: off)
-    sides_paired: bool = False  # ... and the two no further apart than ``off_edge_m``
+    sides_pair_m: float = 0.0  # ... and the two no further apart than this (0: off)
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     # ... unless it was on one this recently: it coasts. Distance to an obstacle cannot jump
@@ -1026,13 +1026,13 @@ class Tracer:
         # room's corner.
         ahead = min(abs(a), abs(b)) < p.sides_ahead_rad
         ok = along and (a > 0.0) != (b > 0.0) and not ahead
-        if p.sides_paired:
-            # And about as far: the trace law drops a pair further apart than ``off_edge_m``,
-            # and access then backs away from the nearer. 0.6 m out of office:1's room
-            # toward its door (seed 2), the wall round the door 2.2 m ahead and 17 degrees
-            # off and a side wall 2.9 m off straddled the way: the robot traced them, backed
-            # off the wall, and traced into the room's corner.
-            ok = ok and obs[1].distance_m - obs[0].distance_m <= p.off_edge_m
+        if p.sides_pair_m > 0.0:
+            # And about as far: the robot departs along the edge, between its two obstacles.
+            # 0.6 m out of office:1's room toward its door (seed 2), the wall round the door
+            # 2.2 m ahead and 17 degrees off and a side wall 2.9 m off straddled the way: the
+            # robot traced them, the trace law dropped a pair 0.7 m apart, access backed it
+            # off the wall, and it traced into the room's corner.
+            ok = ok and obs[1].distance_m - obs[0].distance_m <= p.sides_pair_m
         if self.s.sides_seen < 0 and ok:
             return True  # as almost everywhere: the pair is there at ``depart_m``
         self.s.sides_seen = self.s.sides_seen + 1 if ok else 0
