@@ -107,7 +107,7 @@ class Explorer(
             return Twist(), []
         twist, events = self.tracer.step(scan, odo, status, now_s)
         if self._depart_along is not None:
-            self.tracer.depart(self._depart_along, odo, self.p.own_bearing_until_sides_m)
+            self._depart_own(self._depart_along, odo)
             self._depart_along = None
         if self._straight_m:
             self.tracer.go_straight(self._straight_m)
@@ -166,7 +166,7 @@ class Explorer(
         if along is None:
             self.tracer.depart(ev.departures_rad[pm.index[port]], self._odo)
         else:
-            self.tracer.depart(along, self._odo, self.p.own_bearing_until_sides_m)
+            self._depart_own(along, self._odo)
         straight = self._across_place(node, port)
         if straight:
             self.tracer.go_straight(straight)
@@ -184,6 +184,11 @@ class Explorer(
             return None
         self._note(f"node {node}: departure {port} read merged with another; left by its own")
         return own[port]
+    def _depart_own(self, along: float, odo: Odometry) -> None:
+        """Leave by a port's own bearing (``_departure_bearing``), straight on until its
+        two obstacles, about as far, straddle the way."""
+        p = self.p
+        self.tracer.depart(along, odo, p.own_bearing_until_sides_m, p.own_bearing_pair_m)
     def _hold(self, node: int) -> None:
         self.held = True
         if self.goal is not None and node == self.goal:

@@ -56,6 +56,14 @@ class ExplorerParams:
     # office:1's meet point 94, 2.9 m from the door, the ring heard one jamb dead ahead and a
     # side wall, and the robot traced them at the tracer's 1.5 m, back into the room.
     own_bearing_until_sides_m: float = 3.5
+    # ... and the two within this of one another in distance (0: any two): 0.6 m out of that
+    # room toward its door (seed 2), the wall round the door 2.2 m ahead and 17 degrees off
+    # and a side wall 2.9 m off straddled the way; the robot traced them, the trace law
+    # dropped a pair 0.7 m apart, access backed it off the wall, and it traced into the
+    # room's corner. Not on every departure: leaving a junction of fig1 or fig13, the robot
+    # then went on straight a metre off a curving edge (issue 3's traces: 95th percentile
+    # of the distance from the GVG under 0.15 m in 36 of 60 against 53).
+    own_bearing_pair_m: float = 0.15
     # An excursion straight on along the course (within ``straight_rad`` of it, driving at
     # most ``straight_slack_m`` more than the gap) is on the same edge up to this far (0:
     # only ``rejoin_m``).

@@ -191,7 +191,6 @@ class TracerParams:
     sides_cycles: int = 5  # ... seen so in this many control cycles running
     sides_along_rad: float = math.radians(45.0)  # ... their edge this close to the way
     sides_ahead_rad: float = math.radians(15.0)  # ... neither this close to it (0: off)
-    sides_pair_m: float = 0.0  # ... and the two no further apart than this (0: off)
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
     # ... unless it was on one this recently: it coasts. Distance to an obstacle cannot jump
@@ -343,6 +342,7 @@ class _State:
     trail: deque[tuple[float, float, float]] = field(default_factory=lambda: deque(maxlen=64))
     last_seen: float = 0.0
     until_sides_m: float = 0.0  # this departure's depart_until_sides_m
+    sides_pair_m: float = 0.0  # ... and how near as far its two sides must be (0: any)
     swung_at: float | None = None  # when the trace law's tangent swung off the course
     pair_clearance: float = 0.0  # the last pair's distance (d1) as the trace law set the tangent
     pair_far: float = 0.0  # ... and its second obstacle's (d2), and the odometer then
@@ -958,15 +958,22 @@ class Tracer:
         return a
 
     def depart(
-        self, direction_rad: float, odo: Odometry, until_sides_m: float | None = None
+        self,
+        direction_rad: float,
+        odo: Odometry,
+        until_sides_m: float | None = None,
+        sides_pair_m: float = 0.0,
     ) -> None:
         """Leave the meet point the robot stands at along ``direction_rad`` (odometry frame):
         for an arbiter that held the robot there and has since decided where to go. Going on
         straight until the edge's two obstacles straddle the way, up to ``until_sides_m``
-        (None: ``depart_until_sides_m``)."""
+        (None: ``depart_until_sides_m``), and with ``sides_pair_m`` the two no further apart
+        than that in distance: the sweep did not show this departure, and the two nearest may
+        be no edge's pair yet."""
         self._start_depart(direction_rad, odo)
         if until_sides_m is not None:
             self.s.until_sides_m = until_sides_m
+        self.s.sides_pair_m = sides_pair_m
 
     def go_straight(self, distance_m: float) -> None:
         """On a departure just begun, go on straight along it at least ``distance_m`` from the
@@ -985,6 +992,7 @@ class Tracer:
         s.depart_m = self.p.depart_m if distance is None else distance
         s.sides_seen = -1
         s.until_sides_m = self.p.depart_until_sides_m
+        s.sides_pair_m = 0.0
         s.approach = None
 
     def _depart(self, obs: list[Obstacle], odo: Odometry) -> tuple[float, float] | Twist | None:
@@ -1026,13 +1034,9 @@ class Tracer:
         # room's corner.
         ahead = min(abs(a), abs(b)) < p.sides_ahead_rad
         ok = along and (a > 0.0) != (b > 0.0) and not ahead
-        if p.sides_pair_m > 0.0:
-            # And about as far: the robot departs along the edge, between its two obstacles.
-            # 0.6 m out of office:1's room toward its door (seed 2), the wall round the door
-            # 2.2 m ahead and 17 degrees off and a side wall 2.9 m off straddled the way: the
-            # robot traced them, the trace law dropped a pair 0.7 m apart, access backed it
-            # off the wall, and it traced into the room's corner.
-            ok = ok and obs[1].distance_m - obs[0].distance_m <= p.sides_pair_m
+        if self.s.sides_pair_m > 0.0:
+            # And, on a departure the arbiter asked that of, about as far (``depart``).
+            ok = ok and obs[1].distance_m - obs[0].distance_m <= self.s.sides_pair_m
         if self.s.sides_seen < 0 and ok:
             return True  # as almost everywhere: the pair is there at ``depart_m``
         self.s.sides_seen = self.s.sides_seen + 1 if ok else 0

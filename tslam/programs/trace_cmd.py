@@ -68,7 +68,6 @@ _SETS: dict[str, dict[str, bool | float]] = {
     "jump": {"swing_jump_m": 0.15},  # on by default since stop 49
     "recess": {"sweep_recess": True, "place_corners": True},  # on by default since stop 36
     "contact_memory": {"contact_hold_s": 60.0},
-    "sides_paired": {"sides_pair_m": 0.15},
 }
 SWITCHES = tuple(_SETS)
 
