@@ -21,6 +21,7 @@ from sim_backend.builtin_worlds import builtin_world
 from sim_backend.world import PolygonWorld, StartPose
 from tslam.core.explorer import ExplorerParams
 from tslam.core.tracer import BoundaryReached, MeetPointReached, Tracer, TracerParams
+from tslam.programs.sim_cmd import explore, report
 
 CORRIDOR = (13.2, 8.08)
 ROOM = (13.2, 4.24)
@@ -68,3 +69,17 @@ def test_the_robot_goes_out_through_the_door(seed):
 def test_without_the_pair_the_robot_traces_into_a_corner_of_the_room(seed):
     kind, at = _out_of_the_room(0.0, seed)
     assert kind == "boundary" and at[1] > 6.0 and abs(at[0] - ROOM[0]) > 2.0, at
+
+
+def test_office_1_seed_2_leaves_its_first_room_and_maps_on():
+    # The run of the docstring: without the pair it came back into the room each time, and
+    # at 943 s had nothing left to explore, with 3 of the building's 339 places.
+    reps = {}
+    for pair_m in (ExplorerParams().own_bearing_pair_m, 0.0):
+        params = ExplorerParams(own_bearing_pair_m=pair_m)
+        run = explore("office:1", 2, "paper", duration_s=1200.0, progress=False, params=params)
+        reps[pair_m] = report(run, "office:1", 2, "paper")
+    on, off = reps[ExplorerParams().own_bearing_pair_m], reps[0.0]
+    assert on["false_merges"] == off["false_merges"] == 0
+    assert not on["finished"] and on["found_places"] >= 10
+    assert off["finished"] and off["found_places"] <= 3
