@@ -60,9 +60,9 @@ class ExplorerParams:
     # room toward its door (seed 2), the wall round the door 2.2 m ahead and 17 degrees off
     # and a side wall 2.9 m off straddled the way; the robot traced them, the trace law
     # dropped a pair 0.7 m apart, access backed it off the wall, and it traced into the
-    # room's corner. Not on every departure: leaving a junction of fig1 or fig13, the robot
-    # then went on straight a metre off a curving edge (issue 3's traces, at 0.15 m: 95th
-    # percentile of the distance from the GVG under 0.15 m in 36 of 60 against 53).
+    # room's corner. Not asked of every departure: on each, within 0.15 m, the robot went on
+    # straight a metre off curving edges out of fig1's and fig13's junctions (issue 3's
+    # traces: 95th percentile of the distance from the GVG under 0.15 m in 36 of 60, not 53).
     own_bearing_pair_m: float = 0.45
     # An excursion straight on along the course (within ``straight_rad`` of it, driving at
     # most ``straight_slack_m`` more than the gap) is on the same edge up to this far (0:

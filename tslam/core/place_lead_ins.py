@@ -12,11 +12,11 @@ node's edge of 3.86 m to it was explored), and the copies multiplied from there.
 So a new node reached from such a node ``f`` (like no other node as read, and one edge more
 or fewer than an old node ``g``'s, the rest agreeing in angle under a turn within dead
 reckoning's heading drift, as ``ports_in_place`` reads it) is also tested as the place
-``g``'s edge that way leads to.
-The hypothesis names the new node only: ``f`` and ``g`` differ in degree, so no rotation
-makes one the other; the merge's zipping reaches them by the edge it makes one, and reads
-the node with fewer edges again as its place (``MergeGrow``). As for a lead-in, the edge just
-traced counts for nothing: the merge needs the usual proof from edges still to come.
+``g``'s edge that way leads to. The hypothesis names the new node only: ``f`` and ``g``
+differ in degree, so no rotation makes one the other; the merge's zipping reaches them by
+the edge it makes one, and reads the node with fewer edges again as its place
+(``MergeGrow``). As for a lead-in, the edge just traced counts for nothing: the merge needs
+the usual proof from edges still to come.
 """
 
 from __future__ import annotations

@@ -342,7 +342,7 @@ class _State:
     trail: deque[tuple[float, float, float]] = field(default_factory=lambda: deque(maxlen=64))
     last_seen: float = 0.0
     until_sides_m: float = 0.0  # this departure's depart_until_sides_m
-    sides_pair_m: float = 0.0  # ... and how near as far its two sides must be (0: any)
+    sides_pair_m: float = 0.0  # ... and how much nearer one of its two sides may be (0: any)
     swung_at: float | None = None  # when the trace law's tangent swung off the course
     pair_clearance: float = 0.0  # the last pair's distance (d1) as the trace law set the tangent
     pair_far: float = 0.0  # ... and its second obstacle's (d2), and the odometer then
