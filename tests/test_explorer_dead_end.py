@@ -253,9 +253,15 @@ def test_a_departure_read_merged_with_another_is_left_by_its_own_bearing():
     # The tracer set off by the reading's departure; the explorer's next step turns it.
     # It goes on straight further than from a departure it sees (the way out of a room by a
     # door the sweep does not show: tests/test_tracer_depart_swing.py).
-    departed: list[tuple[float, float | None]] = []
+    departed: list[tuple[float, float | None, float]] = []
     ex.tracer.step = lambda *_: (Twist(), [])
-    ex.tracer.depart = lambda rad, odo, until=None: departed.append((math.degrees(rad), until))
+    ex.tracer.depart = lambda rad, odo, until=None, pair=0.0: departed.append(
+        (math.degrees(rad), until, pair)
+    )
     ex.step(None, ex._odo, None, 1.0)
-    assert departed == [(pytest.approx(3.0, abs=0.05), ex.p.own_bearing_until_sides_m)]
+    # ... and only once its two sides are about as far (tests/test_tracer_room_exit.py).
+    p = ex.p
+    assert departed == [
+        (pytest.approx(3.0, abs=0.05), p.own_bearing_until_sides_m, p.own_bearing_pair_m)
+    ]
     assert ex._depart_along is None
