@@ -735,14 +735,9 @@ class Arrival(ExplorerState):
                 continue
             if not self._heading_fits(f, g, kf):
                 continue
-            edge = self.map.edge(e)
-            c, q = edge.other_end(g, pg)
-            if c in taken or self.map.node(c).kind != "meet" or c not in self.born:
-                continue
-            pred = Prediction(c, q, edge.length_m, "meet")
-            k = arrival_matches(self.map, seen, a, pred, length, tol)
-            if k is not None and self._heading_fits(node, c, k):
-                out.append((g, kf, c, k))
+            led = self._lead_on(g, pg, node, seen, a, length, taken)
+            if led is not None:
+                out.append((g, kf, *led))
         crowd = max(len(out), self._crowd(node, []))
         return [Hypothesis({f: (g, kf), node: (c, k)}, crowd=crowd) for g, kf, c, k in out]
 

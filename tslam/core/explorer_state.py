@@ -180,6 +180,11 @@ class ExplorerState:
             return frozenset()
         return frozenset(n for n in self.hyps.fragment if self.map.has_node(n))
 
+    def _one_place_clearances(self, a: float, b: float, tol: Tolerances) -> bool:
+        """Whether clearances ``a`` and ``b`` may be one place's, read at two of its points:
+        the nearest obstacle's distance changes by no more than the points lie apart."""
+        return abs(a - b) <= tol.clearance_m + self.p.place_hop_m / 2
+
     def _distances(self, node: int) -> dict[int, float]:
         """Graph distance from ``node`` to every node it reaches, by the shortest edges."""
         return nx.single_source_dijkstra_path_length(

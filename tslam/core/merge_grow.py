@@ -48,7 +48,7 @@ class MergeGrow(ExplorerState):
         if x in self.stored or low.ambiguous_with or self._in_hypotheses(x):
             return None
         tol = self._tol()
-        if abs(low.clearance_m - high.clearance_m) > tol.clearance_m + self.p.place_hop_m / 2:
+        if not self._one_place_clearances(low.clearance_m, high.clearance_m, tol):
             return None
         bx, by = self.born.get(x), self.born.get(y)
         bound = math.pi if bx is None or by is None else self._heading_drift(abs(bx - by))

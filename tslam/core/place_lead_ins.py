@@ -24,6 +24,7 @@ from __future__ import annotations
 from tslam.core.explorer_state import ExplorerState
 from tslam.core.localize import Hypothesis, Prediction, arrival_matches, candidates
 from tslam.core.merge_grow import ports_in_place
+from tslam.core.signature import Signature
 
 
 class PlaceLeadIns(ExplorerState):
@@ -55,24 +56,41 @@ class PlaceLeadIns(ExplorerState):
                 or g.id not in self.born
                 or abs(g.degree - fn.degree) != 1
                 or g.ambiguous_with
-                or abs(g.clearance_m - fn.clearance_m) > tol.clearance_m + self.p.place_hop_m / 2
+                or not self._one_place_clearances(g.clearance_m, fn.clearance_m, tol)
             ):
                 continue
             bound = self._heading_drift(abs(self.born[f] - self.born[g.id]))
             for pg in same_port(fn.departures_rad, j, g.departures_rad, tol.angle_rad, bound):
-                e = g.ports[pg]
-                if e is None:
-                    continue
-                edge = self.map.edge(e)
-                c, q = edge.other_end(g.id, pg)
-                if c in taken or self.map.node(c).kind != "meet" or c not in self.born:
-                    continue
-                pred = Prediction(c, q, edge.length_m, "meet")
-                k = arrival_matches(self.map, seen, a, pred, length, tol)
-                if k is not None and self._heading_fits(node, c, k):
-                    found.add((c, k))
+                led = self._lead_on(g.id, pg, node, seen, a, length, taken)
+                if led is not None:
+                    found.add(led)
         crowd = max(len(found), self._crowd(node, []))
         return [Hypothesis({node: (c, k)}, crowd=crowd) for c, k in sorted(found)]
+
+    def _lead_on(
+        self,
+        g: int,
+        pg: int,
+        node: int,
+        seen: Signature,
+        a: int,
+        length: float | None,
+        taken: set[int],
+    ) -> tuple[int, int] | None:
+        """Where old node ``g``'s explored port ``pg`` leads, as the new ``node`` (read as
+        ``seen``, arrived at by index ``a`` after ``length`` metres) would be it: (that meet
+        node, rotation); None if the port is unexplored, its far end is in ``taken`` or no
+        meet node the robot read, or the arrival does not fit it."""
+        e = self.map.node(g).ports[pg]
+        if e is None:
+            return None
+        edge = self.map.edge(e)
+        c, q = edge.other_end(g, pg)
+        if c in taken or self.map.node(c).kind != "meet" or c not in self.born:
+            return None
+        pred = Prediction(c, q, edge.length_m, "meet")
+        k = arrival_matches(self.map, seen, a, pred, length, self._tol())
+        return (c, k) if k is not None and self._heading_fits(node, c, k) else None
 
 
 def same_port(

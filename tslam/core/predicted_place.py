@@ -100,7 +100,7 @@ class PredictedPlace(ExplorerState):
                 old.kind != "meet"
                 or ev.degree != old.degree + 1
                 or old.id in self.hyps.fragment
-                or abs(ev.clearance_m - old.clearance_m) > tol.clearance_m + self.p.place_hop_m / 2
+                or not self._one_place_clearances(ev.clearance_m, old.clearance_m, tol)
             ):
                 continue
             for q, e in enumerate(old.ports):

@@ -341,7 +341,7 @@ class Unhomed(ExplorerState):
             or length is None
             or wn.kind != "meet"
             or not tol.length_ok(length, mapped)
-            or abs(ev.clearance_m - wn.clearance_m) > tol.clearance_m + self.p.place_hop_m / 2
+            or not self._one_place_clearances(ev.clearance_m, wn.clearance_m, tol)
         ):
             return None
         return match_by_angle(
