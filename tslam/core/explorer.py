@@ -112,6 +112,9 @@ class Explorer(
         if self._straight_m:
             self.tracer.go_straight(self._straight_m)
             self._straight_m = 0.0
+        if self._arrive_after is not None:
+            self.tracer.arrive_after(*self._arrive_after)
+            self._arrive_after = None
         self._watch_detour(odo)
         if self.leaving is not None:
             self.paths.add(odo)
@@ -170,6 +173,9 @@ class Explorer(
         straight = self._across_place(node, port)
         if straight:
             self.tracer.go_straight(straight)
+        if self._arrive_after is not None:
+            self.tracer.arrive_after(*self._arrive_after)
+            self._arrive_after = None
     def _departure_bearing(
         self, ev: MeetPointReached, node: int, pm: PortMap, port: int
     ) -> float | None:
@@ -270,6 +276,8 @@ class Explorer(
     # ------------------------------------------------------------------ meet points
     def _choose(self, ev: MeetPointReached) -> int:
         node, pm = self._arrive(ev)
+        if ev.found_by == "entry" and self.map.has_node(node):
+            self.blind.add(node)
         through, self._through = self._through, None
         if through is not None:
             return through  # a weak meet point: carry on along the edge
@@ -296,6 +304,9 @@ class Explorer(
             return ev.arrival_index or 0
         self._leave(node, port)
         self._depart_along = self._departure_bearing(ev, node, pm, port)
+        if self._depart_along is None and ev.found_by != "homing":
+            # Not homed: the door's edge is no departure the ring resolves here.
+            self._depart_along = ev.departures_rad[pm.index[port]]
         self._straight_m = self._across_place(node, port)
         return pm.index[port]
     def _across_place(self, node: int, port: int) -> float:
@@ -336,6 +347,19 @@ class Explorer(
         self.wandered_m = 0.0
         self._detour_from = None
         self.partial_m = 0.0
+        self._arrive_after = self._blind_end(node, port)
+    def _blind_end(self, node: int, port: int) -> tuple[float, tuple[float, ...]] | None:
+        """The length of the known edge out by ``port`` and its far end's departures from
+        it, if that end is a junction the ring may not show (``blind``); else None."""
+        e = self.map.node(node).ports[port]
+        if e is None:
+            return None
+        w, q = self.map.edge(e).other_end(node, port)
+        if w not in self.blind or not self.map.has_node(w):
+            return None
+        deps = self.map.node(w).departures_rad
+        rel = tuple((d - deps[q]) % (2.0 * math.pi) for d in deps)
+        return self.map.edge(e).length_m, rel
     def _next_port(self, node: int, arrival: int | None) -> int | None:
         on_by, self._on_by = self._on_by, None
         if on_by is not None and on_by[0] == node:

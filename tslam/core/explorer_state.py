@@ -124,6 +124,11 @@ class ExplorerState:
         # ports share (``_departure_bearing``).
         self.port_bearings: dict[int, tuple[float, ...]] = {}
         self._depart_along: float | None = None
+        # Meet nodes found by access into a room (``TracerParams.room_entry_m``): junctions
+        # the ring does not show along the room's edges, so an edge to one is traced for its
+        # length and the robot stands there (``Tracer.arrive_after``).
+        self.blind: set[int] = set()
+        self._arrive_after: tuple[float, tuple[float, ...]] | None = None
         self._straight_m = 0.0  # go on straight this far along the departure (_across_place)
         self._now = 0.0
         self._odo: Odometry | None = None
@@ -310,6 +315,7 @@ class ExplorerState:
             pairs.extend((d, r, truth[d], truth[r]) for d, (r, _) in plan.nodes.items())
 
         renamed = merge_mapping(self.map, mapping, alike, record)
+        self.blind |= {r for d, (r, _) in renamed.items() if d in self.blind}
         merged = MergeRecord(self._now, tuple(pairs))
         self.merges.append(merged)
         return renamed, merged

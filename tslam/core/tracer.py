@@ -26,6 +26,9 @@ from tslam.core.sensing import Obstacle, RingSensor, SensingParams
 from tslam.core.sweep import BENT_WALL_MERGE_RAD, WIDE_BEND_MERGE_RAD, Sweep, at_minimum_range
 
 TAU = 2.0 * math.pi
+# A room's door junction (``room_entry_m``): the door's edge, and the room's two across it,
+# square to the way in (the ring's bearings of walls 4 m off swing by a transducer's spacing).
+_ACROSS = (0.0, 0.5 * math.pi, 1.5 * math.pi)
 
 
 class Behaviour(enum.Enum):
@@ -247,6 +250,21 @@ class TracerParams:
     # drift paper) the way in was never more than 30 degrees off a departure (0: off).
     unseen_way_in_rad: float = math.radians(35.0)
     way_in_m: float = 1.0
+    # Into a room through a door in the middle of a wall: past the door the ring merges its
+    # jambs behind the robot into one obstacle, the pair is lost, and access drives on
+    # straight away from them until the far wall ahead is as far. There the door's edge
+    # meets the room's, at a junction whose door edge no sweep resolves (1 m jambs 3.9 m off
+    # are 15 degrees apart, inside one 25-degree beam), and the trace law went left or right
+    # as noise had it: the door's edge was mapped ending at one of the room's two other
+    # junctions on one pass and the other on the next, and a floor of two rooms off a
+    # corridor came out in pieces. So an access that went on straight along the course,
+    # within ``room_entry_rad``, no more than ``room_entry_reach_m``, to stand between one
+    # obstacle behind and one ahead, both at least this far (0: off), is at a junction: the
+    # way in and the two edges across. (Reach as far as the arbiter holds an excursion
+    # straight on to be on the edge, ``ExplorerParams.straight_rejoin_m``.)
+    room_entry_m: float = 1.2
+    room_entry_rad: float = math.radians(30.0)
+    room_entry_reach_m: float = 3.0
     # A contact is an obstacle the ring did not hear (a convex corner in the gap between two
     # beams, which driving straight at it keeps there): it is kept for this long as a point
     # where a transducer read its minimum range, else this far ahead of the centre along the
@@ -268,6 +286,11 @@ class MeetPointReached:
     arrival_index: int | None  # which departure the robot came in by
     relative_rad: tuple[float, ...]  # departure angles measured from the arrival edge
     edge_length_m: float | None = None  # length of the edge that ended here
+    # How the point was found where not by homing: "entry", access into a room stopped
+    # between the door behind and the far wall (``room_entry_m``); "length", a junction
+    # the ring does not show from this side, stood at once the edge's known length was
+    # traced (``Tracer.arrive_after``: the departures are the map's, not read).
+    found_by: str = "homing"
 
 
 @dataclass(frozen=True)
@@ -357,6 +380,12 @@ class _State:
     # and the way out is away from where it was going, not always backwards.
     last_v_sign: float = 1.0
     contacts: list[tuple[float, float, float]] = field(default_factory=list)  # x, y, when
+    # A room's door junction reached by access (``room_entry_m``), or the length of an edge
+    # to a junction the ring does not show (``stop_at``) traced: the two obstacles there and
+    # the bearing back to the door, to report next cycle.
+    entry: tuple[list[Obstacle], float | None] | None = None
+    # ``Tracer.arrive_after``: the edge's length and the departures' angles from its end.
+    stop_at: tuple[float, tuple[float, ...]] | None = None
 
 
 class Tracer:
@@ -401,6 +430,7 @@ class Tracer:
                 # again. fig16 seed 7 touched the indent's back wall eleven times so.
                 self.s.boundary_armed = True
             self.s.behaviour = Behaviour.BACKOFF
+            self.s.entry = None
             self.s.since = now_s
             self.s.depart_from = (odo.x_m, odo.y_m)
             self.s.depart_dir = -self.s.last_v_sign
@@ -469,6 +499,13 @@ class Tracer:
                 prev = _to_robot(s.tangent, odo) if s.tangent else (1.0, 0.0)
                 t = laws.edge_tangent(obs[0], obs[1], prev)
                 if t is not None:
+                    back = self._room_entry(obs, odo)
+                    if back is not None:
+                        # Reported next cycle, stopped here: the arbiter first sees the
+                        # robot back on the graph (its excursion straight on, the same edge).
+                        s.entry = (obs[:2], back)
+                        s.behaviour = Behaviour.TRACE
+                        return Twist(0.0, 0.0, 0.0)
                     course, s.tangent = s.tangent, _to_odom(t, odo)
                     s.behaviour = Behaviour.TRACE
                     # Re-accessed straight on beside a meet point other than the last (off
@@ -482,11 +519,18 @@ class Tracer:
                         and self._new_meet_ahead(obs, odo, anywhere=True)
                     )
                     return self._law(obs, odo, now, events)
+            entering = self._entering(obs, odo)
+            if entering is not None:
+                # On along the door's edge, not away from the ring's bearing of the merged
+                # jambs, which swings a transducer's spacing: the junction stood at is then
+                # on the door's line, and the way back out leads through the door.
+                v = (p.access_mps * entering[0], p.access_mps * entering[1])
+                return laws.to_twist(v, self.limits, reverse_ok=True)
             v = laws.access_velocity(obs, p.access_mps)
             # Backing away is as good as driving away, and spares a half turn.
             return laws.to_twist(v, self.limits, reverse_ok=True)
         if b is Behaviour.DEPART:
-            return self._depart(obs, odo)
+            return self._depart(obs, odo, now)
         if b is Behaviour.BACKOFF:
             gone = math.hypot(odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1])
             # Bounded in time too: backing into something else must not hold the robot here.
@@ -498,6 +542,17 @@ class Tracer:
                 v = (p.backoff_mps * ex, p.backoff_mps * ey)
                 return laws.to_twist(v, self.limits, reverse_ok=True)
             return Twist(p.backoff_mps * s.depart_dir, 0.0, 0.0)
+        if b is Behaviour.TRACE and s.entry is not None:
+            (seen, back), s.entry = s.entry, None
+            rel, s.stop_at = (s.stop_at[1] if s.stop_at else _ACROSS), None
+            self._meet(seen, odo, now, events, way_in=back, rel=rel)
+            return None
+        if s.stop_at is not None and b in (Behaviour.TRACE, Behaviour.HOME) and len(obs) >= 2:
+            length = s.odometer.length_to(odo.x_m, odo.y_m)
+            if length is not None and length >= s.stop_at[0]:
+                s.entry = (obs[:2], None)
+                s.behaviour = Behaviour.TRACE
+                return Twist(0.0, 0.0, 0.0)
         if b is Behaviour.TRACE:
             return self._trace(obs, odo, now, events)
         if b in (Behaviour.HOME, Behaviour.SETTLE):
@@ -589,6 +644,43 @@ class Tracer:
         return gone >= 0.3 and dx * course[0] + dy * course[1] >= gone * math.cos(
             math.radians(30.0)
         )
+
+    def _entering(self, obs: list[Obstacle], odo: Odometry) -> tuple[float, float] | None:
+        """The course (robot frame) if access is taking the robot on into a room, straight
+        on from the door's edge with the nearest obstacle, the door, behind
+        (``room_entry_m``); else None."""
+        s, p = self.s, self.p
+        course = s.tangent
+        if p.room_entry_m <= 0.0 or course is None or not s.trail or not obs:
+            return None
+        if obs[0].distance_m < p.room_entry_m:
+            return None
+        _, x, y = s.trail[-1]
+        dx, dy = odo.x_m - x, odo.y_m - y
+        gone = math.hypot(dx, dy)
+        cos_tol = math.cos(p.room_entry_rad)
+        if gone > p.room_entry_reach_m or dx * course[0] + dy * course[1] < gone * cos_tol:
+            return None
+        cx, cy = _to_robot(course, odo)
+        b = obs[0].bearing_rad
+        if math.cos(b) * cx + math.sin(b) * cy > -cos_tol:
+            return None
+        return cx, cy
+
+    def _room_entry(self, obs: list[Obstacle], odo: Odometry) -> float | None:
+        """The bearing back to the door (odometry frame), toward where the robot last traced
+        between its jambs, if access on its way into the room (``_entering``) has reached
+        the junction where the door's edge meets the room's; else None."""
+        c = self._entering(obs, odo)
+        if c is None or obs[1].distance_m < self.p.room_entry_m:
+            return None
+        _, x, y = self.s.trail[-1]
+        if math.hypot(odo.x_m - x, odo.y_m - y) < 0.3:
+            return None
+        b = obs[1].bearing_rad
+        if math.cos(b) * c[0] + math.sin(b) * c[1] < math.cos(self.p.room_entry_rad):
+            return None  # the second obstacle is not ahead: another edge
+        return math.atan2(y - odo.y_m, x - odo.x_m) % TAU
 
     def _doorway(self, obs: list[Obstacle], odo: Odometry, now: float) -> list[Obstacle]:
         """``obs`` with a doorway's jambs two obstacles again, if that puts the robot on an
@@ -855,9 +947,15 @@ class Tracer:
         now: float,
         events: list[Event],
         point: tuple[float, float] | None = None,
+        way_in: float | None = None,
+        rel: tuple[float, ...] | None = None,
     ) -> None:
+        """Report the meet point the robot stands at and set off along the departure the
+        arbiter chooses (``way_in``: the bearing of the way in, known, else from the trail;
+        ``rel``: the departures' angles from the way in, as the map has them, not read)."""
         s, p = self.s, self.p
         s.rejected_at = None
+        found_by = "entry" if way_in is not None else "homing" if rel is None else "length"
         near = [o for o in obs if o.distance_m - obs[0].distance_m <= p.degree_tol_m]
         around = place_obstacles(obs, near, p.place_radius_m, p.place_tol_m, p.place_corners)
         bearings = laws.departure_bearings(around)
@@ -870,17 +968,26 @@ class Tracer:
         if tangent is not None:
             back = math.atan2(-tangent[1], -tangent[0]) % TAU
             arrival = min(range(len(deps)), key=lambda k: _angdiff(deps[k], back))
-        way_in = self._way_in(odo) if p.unseen_way_in_rad > 0.0 else None
+        if way_in is None and p.unseen_way_in_rad > 0.0 and rel is None:
+            way_in = self._way_in(odo)
         if way_in is not None and min(_angdiff(d, way_in) for d in deps) > p.unseen_way_in_rad:
             deps = sorted((*deps, way_in))
             arrival = deps.index(way_in)
+        if rel is not None:
+            # Not homed: the way back is the door's line, or the chord to where the edge
+            # began (the trace law's tangent swings by a transducer's spacing); the rest
+            # are given.
+            back = way_in if way_in is not None else self._way_back(odo)
+            deps = sorted((back + r) % TAU for r in rel)
+            arrival = min(range(len(deps)), key=lambda k: _angdiff(deps[k], back))
         base = deps[arrival] if arrival is not None else 0.0
         rel = tuple(sorted((d - base) % TAU for d in deps))
         clearance = sum(o.distance_m for o in near) / len(near)
         length = self._edge_done(odo, now, "meet", events, point)
         ev = MeetPointReached(
-            now, odo.x_m, odo.y_m, clearance, len(deps), tuple(deps), arrival, rel, length
-        )
+            now, odo.x_m, odo.y_m, clearance, len(deps), tuple(deps), arrival, rel, length,
+            found_by,
+        )  # fmt: skip
         events.append(ev)
         s.last_meet = s.left_meet = (odo.x_m, odo.y_m)
         s.rejected = False
@@ -950,6 +1057,24 @@ class Tracer:
                 return math.atan2(y - odo.y_m, x - odo.x_m) % TAU
         return None
 
+    def _way_back(self, odo: Odometry) -> float:
+        """The bearing (odometry frame) back to where this edge's trail began, or against
+        the trace law's tangent if that is under 0.3 m off."""
+        s = self.s
+        if s.trail:
+            _, x, y = s.trail[0]
+            if math.hypot(x - odo.x_m, y - odo.y_m) >= 0.3:
+                return math.atan2(y - odo.y_m, x - odo.x_m) % TAU
+        t = s.tangent or (math.cos(odo.heading_rad), math.sin(odo.heading_rad))
+        return math.atan2(-t[1], -t[0]) % TAU
+
+    def arrive_after(self, length_m: float, rel_rad: tuple[float, ...]) -> None:
+        """On the edge just departed along, stand at the junction at its end once
+        ``length_m`` of it is traced, and report it with departures at ``rel_rad`` from the
+        way in: a junction the ring does not show from this side (a room's door junction
+        seen along the room's edge, ``room_entry_m``)."""
+        self.s.stop_at = (length_m, tuple(rel_rad))
+
     def _approach(self, odo: Odometry) -> tuple[float, float, float, float] | None:
         """Where homing onto this meet point began, if it began close enough to count."""
         a = self.s.approach
@@ -994,11 +1119,22 @@ class Tracer:
         s.until_sides_m = self.p.depart_until_sides_m
         s.sides_pair_m = 0.0
         s.approach = None
+        s.stop_at = None
 
-    def _depart(self, obs: list[Obstacle], odo: Odometry) -> tuple[float, float] | Twist | None:
+    def _depart(
+        self, obs: list[Obstacle], odo: Odometry, now: float
+    ) -> tuple[float, float] | Twist | None:
         s, p = self.s, self.p
         err = (s.depart_dir - odo.heading_rad + math.pi) % TAU - math.pi
         gone = math.hypot(odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1])
+        if s.sides_pair_m > 0.0 and p.doorway_pairs:
+            # Out toward a door the ring merged from afar: its jambs are two as soon as the
+            # view between them shows, well before they are ``merge_rad`` apart (from a
+            # room's door junction 0.2 m off the door's line, the robot drove at one jamb
+            # and never saw two sides).
+            apart = self.sensor.apart()
+            if apart is not None:
+                obs = self._with_contacts(apart, odo, now)
         if gone >= s.depart_m and abs(err) < math.radians(15) and self._sides_seen(obs, err, gone):
             s.behaviour = Behaviour.TRACE
             return None
