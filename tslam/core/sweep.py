@@ -52,6 +52,14 @@ MIN_VIEW_RAD = math.radians(5.0)
 #: ... and, read with ``agree``, the readings of one view lie this close in distance,
 #: relatively: they meet the same wall beyond.
 VIEW_AGREE_REL = 0.2
+#: A doorway onto a room deeper than the sonar's range shows no echo between its jambs, not a
+#: deeper one, and its two jambs were one bent wall: the corridor's junction in front of a
+#: 1 m door, jambs 59 degrees apart, was swept and rejected twice (a floor of two rooms off a
+#: corridor, seed 1), and the room beyond was never explored. With ``silent_view`` so many
+#: readings running with no echo, and no reading between the two runs as near as a bend's
+#: vertex (a concave corner echoes from its vertex whatever the beam's angle), are a view.
+SILENT_VIEW_READINGS = 3
+SILENT_VIEW_RAD = math.radians(12.0)
 #: Further apart than ``merge_rad``, two runs are still one bent wall up to this angle if
 #: the readings between them show a shallow bend's vertex: no deeper than this ratio, which
 #: a concave bend of about 55 degrees between normals gives (1 / cos 27.5).
@@ -134,6 +142,7 @@ class Sweep:
         vertex: bool = False,
         recess: bool = False,
         agree: bool = False,
+        silent_view: bool = False,
     ) -> list[Obstacle]:
         """The obstacles seen, in the frame of a robot heading ``heading_rad``; the options
         as for ``sweep_minima``."""
@@ -149,6 +158,7 @@ class Sweep:
             vertex=vertex,
             recess=recess,
             agree=agree,
+            silent_view=silent_view,
         )
 
 
@@ -168,6 +178,7 @@ def sweep_minima(
     vertex: bool = False,
     recess: bool = False,
     agree: bool = False,
+    silent_view: bool = False,
 ) -> list[Obstacle]:
     """Obstacles of a dense circular array of readings (bearing, distance; inf = no echo).
 
@@ -282,7 +293,7 @@ def sweep_minima(
         if set_back[k] or set_back[(k + 1) % m]:
             continue
         a, c = runs[k], runs[(k + 1) % m]
-        one = _one_wall(a, c, d, merge_rad, bend_ratio, shallow, vertex, agree)
+        one = _one_wall(a, c, d, merge_rad, bend_ratio, shallow, vertex, agree, silent_view)
         if one is not False:
             parent[root((k + 1) % m)] = root(k)
         if one is None and doubts is not None:
@@ -524,10 +535,12 @@ def _one_wall(
     shallow: bool = False,
     vertex: bool = False,
     agree: bool = False,
+    silent_view: bool = False,
 ) -> bool | None:
     """``c`` follows ``a`` counter-clockwise; could the two be one bent wall? None: yes, but
     a view between them too narrow to count was seen (a stray echo, or a narrow doorway).
-    With ``agree`` the deeper readings of a view see about as far."""
+    With ``agree`` the deeper readings of a view see about as far; with ``silent_view`` a
+    long enough stretch with no echo is a view (``SILENT_VIEW_READINGS``)."""
     sep = (c[1] - a[1]) % (2 * math.pi)
     if sep >= (BENT_WALL_MAX_RAD if shallow else merge_rad):
         return False
@@ -536,6 +549,8 @@ def _one_wall(
     n = len(d)
     k, end = (a[3] + 1) % n, c[2]
     far = max(a[0], c[0])
+    if silent_view and _silent_view(d, k, end, bend_ratio * far):
+        return False
     if sep >= merge_rad:
         return _shallow_bend(d, k, end, far, agree)
     limit = bend_ratio * far
@@ -561,6 +576,21 @@ def _one_wall(
     if view >= MIN_VIEW_READINGS and view * 2 * math.pi / n >= MIN_VIEW_RAD:
         return False
     return True if not deep else None
+
+
+def _silent_view(d: np.ndarray, k: int, end: int, near_m: float) -> bool:
+    """Whether readings ``k`` up to ``end`` (exclusive, round the sweep) hold a run of no echo
+    ``SILENT_VIEW_READINGS`` long and ``SILENT_VIEW_RAD`` wide, and none nearer than
+    ``near_m`` but the two next to the runs (a jamb's edge of the beam)."""
+    n = len(d)
+    between = [float(d[(k + j) % n]) for j in range((end - k) % n)]
+    if any(x <= near_m for x in between[1:-1]):
+        return False
+    longest = run = 0
+    for x in between:
+        run = 0 if math.isfinite(x) else run + 1
+        longest = max(longest, run)
+    return longest >= SILENT_VIEW_READINGS and longest * 2 * math.pi / n >= SILENT_VIEW_RAD
 
 
 def _view(distances: list[float], agree: bool) -> int:

@@ -172,6 +172,9 @@ class TracerParams:
     # strays at unlike ranges are no view (sweep.py). fig12's cut corner read as a meet point
     # so in seeds 29 and 76; seeds 1-120 complete 357 of 600 against 350 (README, stop 52).
     sweep_view_agree: bool = True
+    # ... and a stretch with no echo between two runs is a view past them, a doorway onto a
+    # room beyond the sonar's range (``sweep.SILENT_VIEW_READINGS``).
+    sweep_silent_view: bool = True
     place_corners: bool = True
     sensing: SensingParams = field(default_factory=SensingParams)
     boundary_clearance_m: float = 0.45  # the edge has run into its corner ...
@@ -265,6 +268,11 @@ class TracerParams:
     room_entry_m: float = 1.2
     room_entry_rad: float = math.radians(30.0)
     room_entry_reach_m: float = 3.0
+    # Leaving by a port's own bearing (``depart``'s ``sides_pair_m``) toward two obstacles
+    # either side of the way within this angle of it, about as far (a door's jambs, the view
+    # between them showing): steer for their middle, straight on until one is this near.
+    door_steer_rad: float = math.radians(60.0)
+    door_steer_m: float = 0.9
     # A contact is an obstacle the ring did not hear (a convex corner in the gap between two
     # beams, which driving straight at it keeps there): it is kept for this long as a point
     # where a transducer read its minimum range, else this far ahead of the centre along the
@@ -880,6 +888,7 @@ class Tracer:
             vertex=p.sweep_vertex,
             recess=p.sweep_recess,
             agree=p.sweep_view_agree,
+            silent_view=p.sweep_silent_view,
         )
         if doubts and p.sweep_again and not s.swept_again:
             # One deeper reading between two walls: a stray echo, or a doorway too narrow
@@ -1058,9 +1067,13 @@ class Tracer:
         return None
 
     def _way_back(self, odo: Odometry) -> float:
-        """The bearing (odometry frame) back to where this edge's trail began, or against
-        the trace law's tangent if that is under 0.3 m off."""
+        """The bearing (odometry frame) back along this edge: by its points the edge odometer
+        took, else to where its trail began, or against the trace law's tangent if that is
+        under 0.3 m off."""
         s = self.s
+        along = s.odometer.way_back()
+        if along is not None:
+            return along  # the sonar's points of the edge: a weave's lateral offset left out
         if s.trail:
             _, x, y = s.trail[0]
             if math.hypot(x - odo.x_m, y - odo.y_m) >= 0.3:
@@ -1135,12 +1148,34 @@ class Tracer:
             apart = self.sensor.apart()
             if apart is not None:
                 obs = self._with_contacts(apart, odo, now)
+                gap = self._door_ahead(obs, err)
+                if gap is not None:
+                    # Steer for the middle of the door: the bearing the port was read at is
+                    # good to some degrees, and 3 m on that is a jamb in the robot's way.
+                    s.depart_dir = (odo.heading_rad + gap) % TAU
+                    err = gap
+                    if min(o.distance_m for o in obs[:2]) > p.door_steer_m:
+                        return (p.alpha_mps * math.cos(err), p.alpha_mps * math.sin(err))
         if gone >= s.depart_m and abs(err) < math.radians(15) and self._sides_seen(obs, err, gone):
             s.behaviour = Behaviour.TRACE
             return None
         if abs(err) > math.radians(10) and gone < 0.02:
             return Twist(0.0, laws.steer_rate(err, self.limits), 0.0)
         return (p.alpha_mps * math.cos(err), p.alpha_mps * math.sin(err))
+
+    def _door_ahead(self, obs: list[Obstacle], err: float) -> float | None:
+        """The bearing (robot frame) of the middle between the two nearest obstacles if they
+        stand either side of the way ``err`` off the heading, within ``door_steer_rad`` of
+        it and about as far (a door's jambs ahead); else None."""
+        if len(obs) < 2:
+            return None
+        a, b = obs[0], obs[1]
+        off = [(o.bearing_rad - err + math.pi) % TAU - math.pi for o in (a, b)]
+        if (off[0] > 0.0) == (off[1] > 0.0) or max(map(abs, off)) > self.p.door_steer_rad:
+            return None
+        if abs(a.distance_m - b.distance_m) > self.s.sides_pair_m:
+            return None
+        return math.atan2(0.5 * (a.y_m + b.y_m), 0.5 * (a.x_m + b.x_m))
 
     def _sides_seen(self, obs: list[Obstacle], err: float, gone: float) -> bool:
         """Whether tracing may begin this far out along a departure ``err`` off the heading.
