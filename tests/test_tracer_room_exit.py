@@ -73,7 +73,7 @@ def test_without_the_pair_the_robot_traces_into_a_corner_of_the_room(seed):
 
 def test_office_1_seed_2_leaves_its_first_room_and_maps_on():
     # The run of the docstring: without the pair it came back into the room each time, and
-    # at 943 s had nothing left to explore, with 3 of the building's 339 places.
+    # at 943 s had nothing left to explore, with 3 of the building's 339 places (stop 57).
     reps = {}
     for pair_m in (ExplorerParams().own_bearing_pair_m, 0.0):
         params = ExplorerParams(own_bearing_pair_m=pair_m)
@@ -82,4 +82,6 @@ def test_office_1_seed_2_leaves_its_first_room_and_maps_on():
     on, off = reps[ExplorerParams().own_bearing_pair_m], reps[0.0]
     assert on["false_merges"] == off["false_merges"] == 0
     assert not on["finished"] and on["found_places"] >= 10
-    assert off["finished"] and off["found_places"] <= 3
+    # Since stop 58 (a room's door junction found by access, the jambs' silent view) the run
+    # without the pair is another one before 943 s; it still maps less (8 places).
+    assert off["found_places"] < on["found_places"]

@@ -196,6 +196,11 @@ class TracerParams:
     depart_until_sides_m: float = 1.5
     sides_cycles: int = 5  # ... seen so in this many control cycles running
     sides_along_rad: float = math.radians(45.0)  # ... their edge this close to the way
+    # ... or this close, leaving by a port's own bearing (``depart``'s ``sides_pair_m``; 0:
+    # as any): from office:1's room meet point 94 the jambs 2.5 m ahead, one obstacle 18
+    # degrees off the way, and a side wall abeam made a pair whose edge ran 38 degrees off
+    # it, and the robot traced them into the room's corner.
+    own_sides_along_rad: float = math.radians(25.0)
     sides_ahead_rad: float = math.radians(15.0)  # ... neither this close to it (0: off)
     lost_timeout_s: float = 1.5
     off_edge_m: float = 0.6  # d2 - d1 beyond which the robot is not on an edge any more
@@ -268,9 +273,12 @@ class TracerParams:
     room_entry_m: float = 1.2
     room_entry_rad: float = math.radians(30.0)
     room_entry_reach_m: float = 3.0
-    # Leaving by a port's own bearing (``depart``'s ``sides_pair_m``) toward two obstacles
-    # either side of the way within this angle of it, about as far (a door's jambs, the view
-    # between them showing): steer for their middle, straight on until one is this near.
+    # Leaving by a port's own bearing (``depart``'s ``sides_pair_m``) toward the nearest
+    # obstacle either side of the way within this angle of it, the two about as far (a
+    # door's jambs, the view between them showing): steer for their middle, straight on
+    # until one is this near (0: off). The bearing the port was read at is good to some
+    # degrees, and 3 m on that put a jamb in the robot's way: out of a room of a floor of
+    # two rooms off a corridor, the robot drove at a jamb the ring did not hear.
     door_steer_rad: float = math.radians(60.0)
     door_steer_m: float = 0.9
     # A contact is an obstacle the ring did not hear (a convex corner in the gap between two
@@ -1140,22 +1148,16 @@ class Tracer:
         s, p = self.s, self.p
         err = (s.depart_dir - odo.heading_rad + math.pi) % TAU - math.pi
         gone = math.hypot(odo.x_m - s.depart_from[0], odo.y_m - s.depart_from[1])
-        if s.sides_pair_m > 0.0 and p.doorway_pairs:
-            # Out toward a door the ring merged from afar: its jambs are two as soon as the
-            # view between them shows, well before they are ``merge_rad`` apart (from a
-            # room's door junction 0.2 m off the door's line, the robot drove at one jamb
-            # and never saw two sides).
+        if s.sides_pair_m > 0.0 and p.door_steer_m > 0.0:
+            # Out toward a door the ring merged from afar (``door_steer_m``): its jambs are
+            # two as soon as the view between them shows (``RingSensor.apart``).
             apart = self.sensor.apart()
-            if apart is not None:
-                obs = self._with_contacts(apart, odo, now)
-                gap = self._door_ahead(obs, err)
-                if gap is not None:
-                    # Steer for the middle of the door: the bearing the port was read at is
-                    # good to some degrees, and 3 m on that is a jamb in the robot's way.
-                    s.depart_dir = (odo.heading_rad + gap) % TAU
-                    err = gap
-                    if min(o.distance_m for o in obs[:2]) > p.door_steer_m:
-                        return (p.alpha_mps * math.cos(err), p.alpha_mps * math.sin(err))
+            gap = None if apart is None else self._door_ahead(apart, err)
+            if gap is not None:
+                s.depart_dir = (odo.heading_rad + gap[0]) % TAU
+                err = gap[0]
+                if gap[1] > p.door_steer_m:
+                    return (p.alpha_mps * math.cos(err), p.alpha_mps * math.sin(err))
         if gone >= s.depart_m and abs(err) < math.radians(15) and self._sides_seen(obs, err, gone):
             s.behaviour = Behaviour.TRACE
             return None
@@ -1163,19 +1165,24 @@ class Tracer:
             return Twist(0.0, laws.steer_rate(err, self.limits), 0.0)
         return (p.alpha_mps * math.cos(err), p.alpha_mps * math.sin(err))
 
-    def _door_ahead(self, obs: list[Obstacle], err: float) -> float | None:
-        """The bearing (robot frame) of the middle between the two nearest obstacles if they
-        stand either side of the way ``err`` off the heading, within ``door_steer_rad`` of
-        it and about as far (a door's jambs ahead); else None."""
-        if len(obs) < 2:
+    def _door_ahead(self, obs: list[Obstacle], err: float) -> tuple[float, float] | None:
+        """The bearing (robot frame) of the middle between the nearest obstacle either side
+        of the way ``err`` off the heading, each within ``door_steer_rad`` of it, and the
+        nearer one's distance, if the two are about as far (a door's jambs ahead); else
+        None."""
+        p = self.p
+        sides: dict[bool, Obstacle] = {}
+        for o in obs:  # nearest first
+            off = (o.bearing_rad - err + math.pi) % TAU - math.pi
+            if abs(off) <= p.door_steer_rad:
+                sides.setdefault(off > 0.0, o)
+        if len(sides) < 2:
             return None
-        a, b = obs[0], obs[1]
-        off = [(o.bearing_rad - err + math.pi) % TAU - math.pi for o in (a, b)]
-        if (off[0] > 0.0) == (off[1] > 0.0) or max(map(abs, off)) > self.p.door_steer_rad:
-            return None
+        a, b = sides[True], sides[False]
         if abs(a.distance_m - b.distance_m) > self.s.sides_pair_m:
             return None
-        return math.atan2(0.5 * (a.y_m + b.y_m), 0.5 * (a.x_m + b.x_m))
+        mid = math.atan2(0.5 * (a.y_m + b.y_m), 0.5 * (a.x_m + b.x_m))
+        return mid, min(a.distance_m, b.distance_m)
 
     def _sides_seen(self, obs: list[Obstacle], err: float, gone: float) -> bool:
         """Whether tracing may begin this far out along a departure ``err`` off the heading.
@@ -1196,7 +1203,10 @@ class Tracer:
         t = laws.edge_tangent(obs[0], obs[1], way)
         # Their edge must also run along the way: a wall behind on the other side (the
         # table beside fig14's door) makes a pair that straddles it, of another edge.
-        along = t is not None and t[0] * way[0] + t[1] * way[1] >= math.cos(p.sides_along_rad)
+        within = p.sides_along_rad
+        if self.s.sides_pair_m > 0.0 and p.own_sides_along_rad > 0.0:
+            within = min(within, p.own_sides_along_rad)
+        along = t is not None and t[0] * way[0] + t[1] * way[1] >= math.cos(within)
         # The ring glimpses the far jamb now and then before it holds it: a glimpse
         # traced from is the jamb-and-wall edge again a cycle later.
         # And neither lies dead ahead: that is what the robot is driving at, not a side. Out
