@@ -400,6 +400,8 @@ class _State:
     # to a junction the ring does not show (``stop_at``) traced: the two obstacles there and
     # the bearing back to the door, to report next cycle.
     entry: tuple[list[Obstacle], float | None] | None = None
+    # The encoder distance when the trace last went on between a doorway's jambs (``_doorway``).
+    doorway_m: float | None = None
     # ``Tracer.arrive_after``: the edge's length and the departures' angles from its end.
     stop_at: tuple[float, tuple[float, ...]] | None = None
 
@@ -669,6 +671,11 @@ class Tracer:
         course = s.tangent
         if p.room_entry_m <= 0.0 or course is None or not s.trail or not obs:
             return None
+        # Only past a doorway: the trace's last pair was its jambs, kept two by the view
+        # between (``_doorway``). Elsewhere, going on straight instead of away from the
+        # nearest wall lost fig13's lab edges (seeds 1-48: 33 complete against 39).
+        if s.doorway_m is None or odo.distance_m - s.doorway_m > p.room_entry_reach_m:
+            return None
         if obs[0].distance_m < p.room_entry_m:
             return None
         _, x, y = s.trail[-1]
@@ -706,6 +713,7 @@ class Tracer:
             return obs
         apart = self._with_contacts(apart, odo, now)
         if apart[1].distance_m - apart[0].distance_m <= self.p.off_edge_m:
+            self.s.doorway_m = odo.distance_m
             return apart
         return obs
 
@@ -1141,6 +1149,7 @@ class Tracer:
         s.sides_pair_m = 0.0
         s.approach = None
         s.stop_at = None
+        s.doorway_m = None
 
     def _depart(
         self, obs: list[Obstacle], odo: Odometry, now: float
