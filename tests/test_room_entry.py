@@ -31,7 +31,6 @@ import pytest
 from hal.interfaces import NOMAD200_LIMITS
 from sim_backend.backend import SimBackend
 from sim_backend.world import PolygonWorld, StartPose
-from tslam.core.edgelength import EdgeOdometer
 from tslam.core.sensing import Obstacle
 from tslam.core.sweep import sweep_minima
 from tslam.core.tracer import MeetPointReached, Tracer, TracerParams
@@ -165,19 +164,6 @@ def test_the_sweep_sees_a_doorway_with_no_echo_between_as_two_jambs():
     # A bend's vertex echoes between its two faces: a concave corner is one wall still.
     d[(np.degrees(b) > 36) & (np.degrees(b) < 44)] = 1.2
     assert len(sweep_minima(b, d, silent_view=True)) == 2
-
-
-def test_the_way_back_along_an_edge_is_taken_from_its_points_on_the_edge():
-    odo = EdgeOdometer()
-    odo.start(0.0, 0.0)
-    assert odo.way_back() is None
-    # The robot weaves 5 cm either side of the edge (y = 0); the sonar's step puts each
-    # point back on it.
-    for i in range(1, 30):
-        x, y = 0.04 * i, 0.05 * (-1) ** i
-        odo.on_edge(x, y, 0.042 * i, (0.0, -y))
-    back = odo.way_back()
-    assert back is not None and _angle(back, math.pi) < math.radians(1.0)
 
 
 def _obstacle(bearing_deg: float, dist: float) -> Obstacle:

@@ -87,16 +87,10 @@ class EdgeOdometer:
         chain = _without_spikes([first, *inner, last], self.detour_ratio)
         return float(sum(math.dist(a, b) for a, b in itertools.pairwise(chain)))
 
-    def way_back(self, min_m: float = 0.3) -> float | None:
-        """The bearing (odometry frame) from the edge's latest point back along it to its
-        earliest, both on the edge by the sonar and neither the node it left; None if they
-        are under ``min_m`` apart."""
-        pending = self._pending()
-        points = [*self._chain[1:], *([pending] if pending is not None else [])]
-        if len(points) < 2 or math.dist(points[0], points[-1]) < min_m:
-            return None
-        (x0, y0), (x1, y1) = points[0], points[-1]
-        return math.atan2(y0 - y1, x0 - x1) % (2.0 * math.pi)
+    @property
+    def origin(self) -> Point | None:
+        """Where the edge began (the node ``start`` was given), if it did."""
+        return self._chain[0] if self._chain else None
 
     def _pending(self) -> Point | None:
         acc = self._sum

@@ -269,10 +269,16 @@ class TracerParams:
     # within ``room_entry_rad``, no more than ``room_entry_reach_m``, to stand between one
     # obstacle behind and one ahead, both at least this far (0: off), is at a junction: the
     # way in and the two edges across. (Reach as far as the arbiter holds an excursion
-    # straight on to be on the edge, ``ExplorerParams.straight_rejoin_m``.)
-    room_entry_m: float = 1.2
+    # straight on to be on the edge, ``ExplorerParams.straight_rejoin_m``.) Nearer, the sweep
+    # resolves a door (0.8 m jambs 1.8 m off are 25 degrees apart, one beam's width) and
+    # the junction is homed onto as any: at 1.2 m, in fig13's lab the rule stood 0.41 m off
+    # the meet point past the gap between a cabinet and the wall (seed 13).
+    room_entry_m: float = 1.8
     room_entry_rad: float = math.radians(30.0)
     room_entry_reach_m: float = 3.0
+    # ... and only past a door: the trace's last pair both behind the robot, each more than
+    # this off the way.
+    room_entry_behind_rad: float = math.radians(100.0)
     # Leaving by a port's own bearing (``depart``'s ``sides_pair_m``) toward the nearest
     # obstacle either side of the way within this angle of it, the two about as far (a
     # door's jambs, the view between them showing): steer for their middle, straight on
@@ -400,8 +406,9 @@ class _State:
     # to a junction the ring does not show (``stop_at``) traced: the two obstacles there and
     # the bearing back to the door, to report next cycle.
     entry: tuple[list[Obstacle], float | None] | None = None
-    # The encoder distance when the trace last went on between a doorway's jambs (``_doorway``).
-    doorway_m: float | None = None
+    # The encoder distance when the trace last went on between two obstacles both behind the
+    # robot (a door's jambs it has just passed), None if its last pair was not so.
+    behind_m: float | None = None
     # ``Tracer.arrive_after``: the edge's length and the departures' angles from its end.
     stop_at: tuple[float, tuple[float, ...]] | None = None
 
@@ -642,6 +649,12 @@ class Tracer:
             else:
                 s.swung_at = None
         s.pair_clearance = o1.distance_m
+        behind = all(
+            math.cos(o.bearing_rad) * t[0] + math.sin(o.bearing_rad) * t[1]
+            < math.cos(p.room_entry_behind_rad)
+            for o in (o1, o2)
+        )
+        s.behind_m = odo.distance_m if behind else None
         s.pair_far, s.pair_at_m = o2.distance_m, odo.distance_m
         s.tangent = _to_odom(t, odo)
         step = laws.step_onto_edge(o1, o2)
@@ -671,10 +684,10 @@ class Tracer:
         course = s.tangent
         if p.room_entry_m <= 0.0 or course is None or not s.trail or not obs:
             return None
-        # Only past a doorway: the trace's last pair was its jambs, kept two by the view
-        # between (``_doorway``). Elsewhere, going on straight instead of away from the
-        # nearest wall lost fig13's lab edges (seeds 1-48: 33 complete against 39).
-        if s.doorway_m is None or odo.distance_m - s.doorway_m > p.room_entry_reach_m:
+        # Only past a doorway: the trace's last pair both behind the robot, the jambs it went
+        # between. Elsewhere, going on straight instead of away from the nearest wall lost
+        # fig13's lab edges (seeds 1-48: 33 complete against 39).
+        if s.behind_m is None or odo.distance_m - s.behind_m > p.room_entry_reach_m:
             return None
         if obs[0].distance_m < p.room_entry_m:
             return None
@@ -713,7 +726,6 @@ class Tracer:
             return obs
         apart = self._with_contacts(apart, odo, now)
         if apart[1].distance_m - apart[0].distance_m <= self.p.off_edge_m:
-            self.s.doorway_m = odo.distance_m
             return apart
         return obs
 
@@ -1083,17 +1095,19 @@ class Tracer:
         return None
 
     def _way_back(self, odo: Odometry) -> float:
-        """The bearing (odometry frame) back along this edge: by its points the edge odometer
-        took, else to where its trail began, or against the trace law's tangent if that is
-        under 0.3 m off."""
+        """The bearing (odometry frame) back to the node this edge began at, else to where
+        its trail began, or against the trace law's tangent if that is under 0.3 m off.
+        The node was homed onto, good to centimetres: over the 1 m edges of a floor of two
+        rooms (8 stands) that was within 3.3 degrees of the edge's true bearing, the
+        edge's own points by the sonar within 8.2 (about a junction the two nearest walls
+        are often another edge's pair) and the trail's start within 5.4."""
         s = self.s
-        along = s.odometer.way_back()
-        if along is not None:
-            return along  # the sonar's points of the edge: a weave's lateral offset left out
+        ends = [s.odometer.origin]
         if s.trail:
-            _, x, y = s.trail[0]
-            if math.hypot(x - odo.x_m, y - odo.y_m) >= 0.3:
-                return math.atan2(y - odo.y_m, x - odo.x_m) % TAU
+            ends.append((s.trail[0][1], s.trail[0][2]))
+        for end in ends:
+            if end is not None and math.hypot(end[0] - odo.x_m, end[1] - odo.y_m) >= 0.3:
+                return math.atan2(end[1] - odo.y_m, end[0] - odo.x_m) % TAU
         t = s.tangent or (math.cos(odo.heading_rad), math.sin(odo.heading_rad))
         return math.atan2(-t[1], -t[0]) % TAU
 
@@ -1149,7 +1163,7 @@ class Tracer:
         s.sides_pair_m = 0.0
         s.approach = None
         s.stop_at = None
-        s.doorway_m = None
+        s.behind_m = None
 
     def _depart(
         self, obs: list[Obstacle], odo: Odometry, now: float
