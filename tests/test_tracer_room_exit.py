@@ -72,16 +72,12 @@ def test_without_the_pair_the_robot_traces_into_a_corner_of_the_room(seed):
 
 
 def test_office_1_seed_2_leaves_its_first_room_and_maps_on():
-    # The run of the docstring: without the pair it came back into the room each time, and
-    # at 943 s had nothing left to explore, with 3 of the building's 339 places (stop 57).
-    reps = {}
-    for pair_m in (ExplorerParams().own_bearing_pair_m, 0.0):
-        params = ExplorerParams(own_bearing_pair_m=pair_m)
-        run = explore("office:1", 2, "paper", duration_s=1200.0, progress=False, params=params)
-        reps[pair_m] = report(run, "office:1", 2, "paper")
-    on, off = reps[ExplorerParams().own_bearing_pair_m], reps[0.0]
-    assert on["false_merges"] == off["false_merges"] == 0
-    assert not on["finished"] and on["found_places"] >= 10
-    # Since stop 58 (a room's door junction found by access, the jambs' silent view) the run
-    # without the pair is another one before 943 s; it still maps less (8 places).
-    assert off["found_places"] < on["found_places"]
+    # The run of the docstring: at stop 57, without the pair it came back into the room each
+    # time, and at 943 s had nothing left to explore, with 3 of the building's 339 places.
+    # Since stop 58 (doors found from inside rooms, tests/test_room_entry.py) that run takes
+    # another way before then, and maps on without the pair too (23 places at 2400 s against
+    # 18): the tests above hold the pair's own effect. What stays is that the robot leaves.
+    run = explore("office:1", 2, "paper", duration_s=2400.0, progress=False)
+    rep = report(run, "office:1", 2, "paper")
+    assert rep["false_merges"] == 0
+    assert not rep["finished"] and rep["found_places"] >= 15

@@ -280,7 +280,8 @@ class TracerParams:
     # this off the way.
     room_entry_behind_rad: float = math.radians(100.0)
     # A meet point near in the obstacles with a doorway's jambs kept two by the view between
-    # (``RingSensor.apart``) is homed onto as any, on those obstacles (``_apart_meet``).
+    # (``RingSensor.apart``) is homed onto as any, on those obstacles (``_apart_meet``; with
+    # ``doorway_pairs`` only).
     home_apart: bool = True
     # Leaving by a port's own bearing (``depart``'s ``sides_pair_m``) toward the nearest
     # obstacle either side of the way within this angle of it, the two about as far (a
@@ -736,7 +737,8 @@ class Tracer:
         ``obs``, make a meet point near (``home_apart``); else None. A door junction 1.85 m
         inside a room, by its side wall, heard the merged jambs and the wall: two obstacles,
         and the robot traced on into the room (a floor of six rooms, seed 1)."""
-        if not self.p.home_apart or self._meet_near(obs, odo):
+        p = self.p
+        if not (p.home_apart and p.doorway_pairs) or self._meet_near(obs, odo):
             return None
         apart = self.sensor.apart()
         if apart is None:
