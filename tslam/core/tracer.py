@@ -280,8 +280,9 @@ class TracerParams:
     # this off the way.
     room_entry_behind_rad: float = math.radians(100.0)
     # A meet point near in the obstacles with a doorway's jambs kept two by the view between
-    # (``RingSensor.apart``) is homed onto as any, on those obstacles (``_apart_meet``; with
-    # ``doorway_pairs`` only).
+    # (``RingSensor.apart``), just past a door (``_past_door``), is homed onto as any, on
+    # those obstacles (``_apart_meet``; with ``doorway_pairs`` only). Anywhere, it homed onto
+    # points in fig13's lab the sweep then rejected, and seeds 35 and 36 went wrong.
     home_apart: bool = True
     # Leaving by a port's own bearing (``depart``'s ``sides_pair_m``) toward the nearest
     # obstacle either side of the way within this angle of it, the two about as far (a
@@ -411,7 +412,7 @@ class _State:
     # the bearing back to the door, to report next cycle.
     entry: tuple[list[Obstacle], float | None] | None = None
     # The encoder distance when the trace last went on between two obstacles both behind the
-    # robot (a door's jambs it has just passed), None if its last pair was not so.
+    # robot (a door's jambs it has just passed) on this edge, None if it did not.
     behind_m: float | None = None
     # Homing onto a meet point the ring shows only with a doorway's jambs kept apart.
     home_apart: bool = False
@@ -668,7 +669,8 @@ class Tracer:
             < math.cos(p.room_entry_behind_rad)
             for o in (o1, o2)
         )
-        s.behind_m = odo.distance_m if behind else None
+        if behind:
+            s.behind_m = odo.distance_m
         s.pair_far, s.pair_at_m = o2.distance_m, odo.distance_m
         s.tangent = _to_odom(t, odo)
         step = laws.step_onto_edge(o1, o2)
@@ -698,10 +700,9 @@ class Tracer:
         course = s.tangent
         if p.room_entry_m <= 0.0 or course is None or not s.trail or not obs:
             return None
-        # Only past a doorway: the trace's last pair both behind the robot, the jambs it went
-        # between. Elsewhere, going on straight instead of away from the nearest wall lost
-        # fig13's lab edges (seeds 1-48: 33 complete against 39).
-        if s.behind_m is None or odo.distance_m - s.behind_m > p.room_entry_reach_m:
+        # Only past a doorway (``_past_door``). Elsewhere, going on straight instead of away
+        # from the nearest wall lost fig13's lab edges (seeds 1-48: 33 complete against 39).
+        if not self._past_door(odo):
             return None
         if obs[0].distance_m < p.room_entry_m:
             return None
@@ -732,13 +733,21 @@ class Tracer:
             return None  # the second obstacle is not ahead: another edge
         return math.atan2(y - odo.y_m, x - odo.x_m) % TAU
 
+    def _past_door(self, odo: Odometry) -> bool:
+        """Whether the robot traced between two obstacles both behind it, the jambs of a
+        door it went through, within the last ``room_entry_reach_m`` of travel."""
+        s = self.s
+        return s.behind_m is not None and odo.distance_m - s.behind_m <= self.p.room_entry_reach_m
+
     def _apart_meet(self, obs: list[Obstacle], odo: Odometry, now: float) -> list[Obstacle] | None:
         """The obstacles with a doorway's jambs kept two (``RingSensor.apart``) if they, not
         ``obs``, make a meet point near (``home_apart``); else None. A door junction 1.85 m
         inside a room, by its side wall, heard the merged jambs and the wall: two obstacles,
         and the robot traced on into the room (a floor of six rooms, seed 1)."""
         p = self.p
-        if not (p.home_apart and p.doorway_pairs) or self._meet_near(obs, odo):
+        if not (p.home_apart and p.doorway_pairs and self._past_door(odo)):
+            return None
+        if self._meet_near(obs, odo):
             return None
         apart = self.sensor.apart()
         if apart is None:
