@@ -31,6 +31,7 @@ import pytest
 from hal.interfaces import NOMAD200_LIMITS
 from sim_backend.backend import SimBackend
 from sim_backend.world import PolygonWorld, StartPose
+from sim_backend.world_files import load_world
 from tslam.core.sensing import Obstacle
 from tslam.core.sweep import sweep_minima
 from tslam.core.tracer import MeetPointReached, Tracer, TracerParams
@@ -201,3 +202,37 @@ def test_the_floor_of_two_rooms_is_explored_completely(tmp_path):
     rep = report(run, world, 2, "paper")
     assert rep["false_merges"] == 0 and not rep["complete"]
     assert rep["found_meet_points"] < rep["true_meet_points"]
+
+
+def _floor_map(tmp_path: Path) -> Path:
+    """The floor as a ROS map_server map at 5 cm a cell, with no start."""
+    res, width, height = 0.05, 400, 200
+    img = np.full((height, width), 254, dtype=np.uint8)
+
+    def wall(x0: float, y0: float, x1: float, y1: float) -> None:
+        rows = slice(height - round(y1 / res), height - round(y0 / res))
+        img[rows, round(x0 / res) : round(x1 / res)] = 0
+
+    for x0, y0, x1, y1 in [(0, 0, 20, 0.1), (0, 9.9, 20, 10), (0, 0, 0.1, 10), (19.9, 0, 20, 10)]:
+        wall(x0, y0, x1, y1)
+    for box in FLOOR["obstacles"]:
+        (x0, y0), (x1, y1) = box[0], box[2]
+        wall(x0, y0, x1, y1)
+    (tmp_path / "floor.pgm").write_bytes(b"P5\n400 200\n255\n" + img.tobytes())
+    path = tmp_path / "floor.yaml"
+    path.write_text(
+        "image: floor.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    )
+    return path
+
+
+def test_a_map_with_no_start_begins_at_a_corridor_junction_and_is_explored(tmp_path):
+    path = _floor_map(tmp_path)
+    world = load_world(path)
+    # Not the farthest free cell, a room's middle, whose door the ring cannot see: the
+    # corridor's junction in front of a door.
+    at = (world.start.x, world.start.y)
+    assert min(math.dist(at, (5.0, 1.116)), math.dist(at, CORRIDOR_JUNCTION)) < 0.05, at
+    rep = report(explore(str(path), 1, "paper", 3000.0, progress=False), str(path), 1, "paper")
+    assert rep["complete"] and rep["false_merges"] == 0

@@ -284,6 +284,7 @@ class TracerParams:
     # those obstacles (``_apart_meet``; with ``doorway_pairs`` only). Anywhere, it homed onto
     # points in fig13's lab the sweep then rejected, and seeds 35 and 36 went wrong.
     home_apart: bool = True
+    apart_gap_m: float = 0.6  # ... each two of its three obstacles at least this far apart
     # Leaving by a port's own bearing (``depart``'s ``sides_pair_m``) toward the nearest
     # obstacle either side of the way within this angle of it, the two about as far (a
     # door's jambs, the view between them showing): steer for their middle, straight on
@@ -414,8 +415,10 @@ class _State:
     # The encoder distance when the trace last went on between two obstacles both behind the
     # robot (a door's jambs it has just passed) on this edge, None if it did not.
     behind_m: float | None = None
-    # Homing onto a meet point the ring shows only with a doorway's jambs kept apart.
+    # Homing onto a meet point the ring shows only with a doorway's jambs kept apart; and
+    # where the sweep last found none so (odometry frame).
     home_apart: bool = False
+    apart_rejected: tuple[float, float] | None = None
     # ``Tracer.arrive_after``: the edge's length and the departures' angles from its end.
     stop_at: tuple[float, tuple[float, ...]] | None = None
 
@@ -744,16 +747,29 @@ class Tracer:
         ``obs``, make a meet point near (``home_apart``); else None. A door junction 1.85 m
         inside a room, by its side wall, heard the merged jambs and the wall: two obstacles,
         and the robot traced on into the room (a floor of six rooms, seed 1)."""
-        p = self.p
+        s, p = self.s, self.p
         if not (p.home_apart and p.doorway_pairs and self._past_door(odo)):
             return None
         if self._meet_near(obs, odo):
+            return None
+        near = s.apart_rejected
+        if near is not None and math.dist(near, (odo.x_m, odo.y_m)) < p.rejected_meet_m:
             return None
         apart = self.sensor.apart()
         if apart is None:
             return None
         apart = self._with_contacts(apart, odo, now)
-        return apart if self._meet_near(apart, odo) else None
+        if not self._meet_near(apart, odo):
+            return None
+        # Two points closer than a door is wide are no door's jambs: a view between the
+        # minima of one cabinet's corner, 11 degrees apart 1.2 m off, made fig13's meet
+        # points (seeds 1-48: 28 complete against 39).
+        three = apart[:3]
+        for i, a in enumerate(three):
+            for b in three[i + 1 :]:
+                if math.hypot(a.x_m - b.x_m, a.y_m - b.y_m) < p.apart_gap_m:
+                    return None
+        return apart
 
     def _doorway(self, obs: list[Obstacle], odo: Odometry, now: float) -> list[Obstacle]:
         """``obs`` with a doorway's jambs two obstacles again, if that puts the robot on an
@@ -992,6 +1008,13 @@ class Tracer:
         if swept is None or touching or not laws.equidistant(obs, 3, p.meet_spread_m):
             # Three obstacles came close to equidistant but never met: the edge goes on.
             s.behaviour = Behaviour.TRACE
+            if s.home_apart:
+                # Homed for the ring's finer reading only: what the ring reads as ever may
+                # still be a meet point here (fig13's close pairs by a cabinet's gap), so
+                # this is no rejection; only that reading is not asked here again.
+                s.home_apart = False
+                s.apart_rejected = (odo.x_m, odo.y_m)
+                return None
             s.armed = False
             # With centred_meet, where the rejected point is: the sweep's estimate if it
             # is about here, else here. An estimate metres off (three walls far from
@@ -1201,6 +1224,7 @@ class Tracer:
         s.approach = None
         s.stop_at = None
         s.home_apart = False
+        s.apart_rejected = None
         s.behind_m = None
 
     def _depart(
