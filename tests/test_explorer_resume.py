@@ -129,7 +129,15 @@ def test_killed_with_a_question_open_the_robot_restarts_from_the_settled_map():
         [[(d, r, td, tr) for d, r, td, tr in m.pairs] for m in ex.merges],
     )
     assert score["false_merges"] == 0 and score["duplicate_nodes"] == 0 and score["covered"]
-    assert not restart(killed.map).done  # the whole map, its open question and all
+    # The whole map, its open question and all: until stop 58 the robot never finished; now
+    # it finishes with a wrong map (12 nodes, 6 of them copies).
+    whole = restart(killed.map)
+    copies = score_exploration(
+        compute_gvg(_backend().world),
+        whole.map.to_dict(),
+        [[(d, r, td, tr) for d, r, td, tr in m.pairs] for m in whole.merges],
+    )["duplicate_nodes"]
+    assert not whole.done or copies > 0
 
 
 FIG1_TOP_RIGHT = StartPose(5.6, 10.9, 1.0)

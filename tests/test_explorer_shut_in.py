@@ -11,6 +11,7 @@ from hal.interfaces import NOMAD200_LIMITS
 from hal.types import Odometry
 from tests.test_explorer_past import _add, meet
 from tslam.core.explorer import Explorer, ExplorerParams
+from tslam.core.tracer import TracerParams
 from tslam.programs.sim_cmd import explore, report
 
 ROOM_DOOR = [0, 120, 240]  # the junction by the door, read without the door's edge
@@ -119,9 +120,17 @@ def test_office_2_seed_1_room_closed_on_itself(recheck: bool):
     junction, it reads the door's edge; it goes out and maps on. As the run was before
     ``own_bearing_pair_m`` (stop 57), which re-rolls it from 1060 s on: a departure left by its
     own bearing out of the room's door junction then went out rather than back to its other
-    point."""
+    point. And as before stop 58's rules for rooms' doors, which re-roll it too."""
     params = ExplorerParams(recheck_shut_in=recheck, own_bearing_pair_m=0.0)
-    run = explore("office:2", 1, "paper", 2000.0, progress=False, params=params)
+    tracer = TracerParams(
+        room_entry_m=0.0,
+        sweep_silent_view=False,
+        home_apart=False,
+        door_steer_m=0.0,
+        own_sides_along_rad=0.0,
+    )
+    run = explore("office:2", 1, "paper", 2000.0, progress=False, params=params,
+                  tracer_params=tracer)  # fmt: skip
     texts = [n.text for n in run.explorer.notes]
     rep = report(run, "office:2", 1, "paper")
     if recheck:
