@@ -70,7 +70,7 @@ def test_fig13_is_mapped_whole():
     loop: ``tslam bench explore --worlds fig13 --drifts paper --seeds 1,...,12 --duration
     3000``: seeds 4, 7, 9 and 11 on stop 45's code, 7 and 11 on stop 44's, none before."""
     # Since stop 58 the jambs kept apart past a gap make meet points to home onto
-    # (``home_apart``), and that re-rolls this run (it stops short): it is kept as it was.
+    # (``home_apart``), and the run so no longer completes: it is kept as it was.
     tracer = TracerParams(home_apart=False)
     run = explore("fig13", 4, "paper", duration_s=3000.0, progress=False, tracer_params=tracer)
     rep = report(run, "fig13", 4, "paper")

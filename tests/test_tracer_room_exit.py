@@ -75,8 +75,8 @@ def test_office_1_seed_2_leaves_its_first_room_and_maps_on():
     # The run of the docstring: at stop 57, without the pair it came back into the room each
     # time, and at 943 s had nothing left to explore, with 3 of the building's 339 places.
     # Since stop 58 (doors found from inside rooms, tests/test_room_entry.py) that run takes
-    # another way before then, and maps on without the pair too (23 places at 2400 s against
-    # 18): the tests above hold the pair's own effect. What stays is that the robot leaves.
+    # another way before then, and maps on without the pair too (20 places at 2400 s against
+    # 25): the tests above hold the pair's own effect. What stays is that the robot leaves.
     run = explore("office:1", 2, "paper", duration_s=2400.0, progress=False)
     rep = report(run, "office:1", 2, "paper")
     assert rep["false_merges"] == 0
