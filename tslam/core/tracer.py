@@ -627,10 +627,11 @@ class Tracer:
             s.behaviour = Behaviour.ACCESS  # these two are not the edge's obstacles
             return None
         s.last_paired = now
-        apart = self._apart_meet(obs, odo, now) if s.armed else None
+        near = s.armed and self._meet_near(obs, odo)
+        apart = self._apart_meet(odo, now) if s.armed and not near else None
         if apart is not None:
             obs = apart
-        if s.armed and (apart is not None or self._meet_near(obs, odo)):
+        if near or apart is not None:
             s.home_apart = apart is not None
             s.behaviour = Behaviour.HOME
             s.home_target = None
@@ -742,15 +743,14 @@ class Tracer:
         s = self.s
         return s.behind_m is not None and odo.distance_m - s.behind_m <= self.p.room_entry_reach_m
 
-    def _apart_meet(self, obs: list[Obstacle], odo: Odometry, now: float) -> list[Obstacle] | None:
-        """The obstacles with a doorway's jambs kept two (``RingSensor.apart``) if they, not
-        ``obs``, make a meet point near (``home_apart``); else None. A door junction 1.85 m
-        inside a room, by its side wall, heard the merged jambs and the wall: two obstacles,
-        and the robot traced on into the room (a floor of six rooms, seed 1)."""
+    def _apart_meet(self, odo: Odometry, now: float) -> list[Obstacle] | None:
+        """The obstacles with a doorway's jambs kept two (``RingSensor.apart``) if they make a
+        meet point near where the ring's own obstacles do not (``home_apart``); else None. A
+        door junction 1.85 m inside a room, by its side wall, heard the merged jambs and the
+        wall: two obstacles, and the robot traced on into the room (a floor of six rooms,
+        seed 1)."""
         s, p = self.s, self.p
         if not (p.home_apart and p.doorway_pairs and self._past_door(odo)):
-            return None
-        if self._meet_near(obs, odo):
             return None
         near = s.apart_rejected
         if near is not None and math.dist(near, (odo.x_m, odo.y_m)) < p.rejected_meet_m:
