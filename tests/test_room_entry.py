@@ -28,13 +28,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hal.interfaces import NOMAD200_LIMITS
 from sim_backend.backend import SimBackend
 from sim_backend.world import PolygonWorld, StartPose
 from sim_backend.world_files import load_world
+from tslam.core import doors
 from tslam.core.sensing import Obstacle
 from tslam.core.sweep import sweep_minima
 from tslam.core.tracer import MeetPointReached, Tracer, TracerParams
+from tslam.core.tracer_state import TracerState
 from tslam.programs.sim_cmd import explore, report
 
 CORRIDOR_JUNCTION = (15.0, 1.116)  # in front of the east room's door
@@ -173,14 +174,13 @@ def _obstacle(bearing_deg: float, dist: float) -> Obstacle:
 
 
 def test_a_door_ahead_is_its_two_jambs_either_side_of_the_way():
-    tracer = Tracer(NOMAD200_LIMITS, TracerParams())
-    tracer.s.sides_pair_m = 0.45
+    p, s = TracerParams(), TracerState(sides_pair_m=0.45)
     jambs = [_obstacle(-20.0, 1.5), _obstacle(28.0, 1.6), _obstacle(90.0, 1.55)]
-    mid, near = tracer._door_ahead(jambs, 0.0)
+    mid, near = doors.door_ahead(p, s, jambs, 0.0)
     assert near == pytest.approx(1.5) and math.degrees(mid) == pytest.approx(4.3, abs=1.0)
     # A side wall abeam is no jamb; nor is a pair far apart in distance.
-    assert tracer._door_ahead([_obstacle(-20.0, 1.5), _obstacle(90.0, 1.5)], 0.0) is None
-    assert tracer._door_ahead([_obstacle(-20.0, 1.5), _obstacle(28.0, 2.2)], 0.0) is None
+    assert doors.door_ahead(p, s, [_obstacle(-20.0, 1.5), _obstacle(90.0, 1.5)], 0.0) is None
+    assert doors.door_ahead(p, s, [_obstacle(-20.0, 1.5), _obstacle(28.0, 2.2)], 0.0) is None
 
 
 def _floor_file(tmp_path: Path) -> str:

@@ -19,6 +19,7 @@ from hal.interfaces import DriveLimits
 from hal.types import Odometry
 from tslam.core.edgepaths import EdgePaths
 from tslam.core.explorer_params import ExplorerParams
+from tslam.core.frames import TAU, angdiff
 from tslam.core.localize import Hypotheses, Tolerances
 from tslam.core.portmap import PortMap
 from tslam.core.signature import Signature
@@ -27,7 +28,6 @@ from tslam.core.topomap import Likeness, MergePlan, Step, TopoMap
 from tslam.core.tracer import BoundaryReached, MeetPointReached, Tracer, TracerParams
 from tslam.core.zipmerge import Renames, merge_mapping
 
-TAU = 2.0 * math.pi
 # Edges a hypothesis may say went past a junction (``Explorer._past_a_junction``).
 MAX_CUTS = 2
 
@@ -373,7 +373,3 @@ def reading_turn(
 def nearest(bearing: float, deps: Sequence[float]) -> int:
     """The index of the departure in ``deps`` nearest ``bearing``."""
     return min(range(len(deps)), key=lambda p: angdiff(deps[p], bearing))
-
-
-def angdiff(a: float, b: float) -> float:
-    return abs((a - b + math.pi) % TAU - math.pi)

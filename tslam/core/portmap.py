@@ -14,7 +14,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-TAU = 2.0 * math.pi
+from tslam.core.frames import TAU, angdiff
 
 
 @dataclass(frozen=True)
@@ -55,7 +55,7 @@ def bearing_shift(
     n = len(now_rad)
 
     def misfit(k: int) -> float:
-        return max(_angdiff(now_rad[i], then_rad[(i + k) % n]) for i in range(n))
+        return max(angdiff(now_rad[i], then_rad[(i + k) % n]) for i in range(n))
 
     shift = min(range(n), key=misfit)
     return shift if misfit(shift) <= tol_rad else None
@@ -75,13 +75,13 @@ def merged_by_bearing(
     if len(now_rad) != n - 1 or n < 3:
         return None
     order = sorted(range(n), key=lambda i: then_rad[i] % TAU)
-    nearest = [min(range(n - 1), key=lambda m: _angdiff(now_rad[m], b)) for b in then_rad]
+    nearest = [min(range(n - 1), key=lambda m: angdiff(now_rad[m], b)) for b in then_rad]
     found = []
     for k in range(n):
         lo, hi = order[k], order[(k + 1) % n]
         index = list(nearest)
         alone = [i for i in range(n) if i not in (lo, hi)]
-        if any(_angdiff(now_rad[index[i]], then_rad[i]) > tol_rad for i in alone):
+        if any(angdiff(now_rad[index[i]], then_rad[i]) > tol_rad for i in alone):
             continue
         rest = set(range(n - 1)) - {index[i] for i in alone}
         if len(rest) != 1:
@@ -118,7 +118,7 @@ def match_by_angle(
     turn = seen_rad[arrival_index] - ports_rad[arrival_port]
     index = _nearest(seen_rad, arrival_index, ports_rad, arrival_port, turn)
     agree = sum(
-        _angdiff(seen_rad[i] - turn, ports_rad[p]) <= angle_tol_rad
+        angdiff(seen_rad[i] - turn, ports_rad[p]) <= angle_tol_rad
         for p, i in enumerate(index)
         if p != arrival_port
     )
@@ -156,9 +156,9 @@ def turned_onto(
 
     def matched(turn: float) -> tuple[float, float, tuple[int, ...]]:
         index = tuple(
-            min(range(d), key=lambda i: _angdiff(seen_rad[i], b - turn)) for b in ports_rad
+            min(range(d), key=lambda i: angdiff(seen_rad[i], b - turn)) for b in ports_rad
         )
-        off = sum(_angdiff(seen_rad[i], b - turn) for i, b in zip(index, ports_rad, strict=True))
+        off = sum(angdiff(seen_rad[i], b - turn) for i, b in zip(index, ports_rad, strict=True))
         return off, turn, index
 
     # Every port on every departure: the turns worth trying.
@@ -167,7 +167,7 @@ def turned_onto(
     mine = [p for p, i in enumerate(index) if i == a]
     if a is None or not mine:
         return PortMap(index, None)
-    return PortMap(index, min(mine, key=lambda p: _angdiff(ports_rad[p] - turn, seen_rad[a])))
+    return PortMap(index, min(mine, key=lambda p: angdiff(ports_rad[p] - turn, seen_rad[a])))
 
 
 def _match_turned(
@@ -196,19 +196,19 @@ def _match_turned(
             if i0 == a or p0 == q:
                 continue
             turn = seen_rad[i0] - ports_rad[p0]
-            if _angdiff(turn, 0.0) > max_turn or _angdiff(seen_rad[a] - turn, ports_rad[q]) > slack:
+            if angdiff(turn, 0.0) > max_turn or angdiff(seen_rad[a] - turn, ports_rad[q]) > slack:
                 continue
             index = _nearest(seen_rad, a, ports_rad, q, turn)
             if ns > nm:
                 ok = len(set(index)) == nm and all(
-                    _angdiff(seen_rad[index[p]] - turn, ports_rad[p]) <= tol
+                    angdiff(seen_rad[index[p]] - turn, ports_rad[p]) <= tol
                     for p in range(nm)
                     if p != q
                 )
             else:
                 ok = all(
                     any(
-                        _angdiff(seen_rad[i] - turn, ports_rad[p]) <= tol
+                        angdiff(seen_rad[i] - turn, ports_rad[p]) <= tol
                         for p in range(nm)
                         if p != q
                     )
@@ -237,9 +237,6 @@ def _nearest(
             index.append(a)
             continue
         others = (i for i in range(ns) if ns < nm or i != a)
-        index.append(min(others, key=lambda i: _angdiff(seen_rad[i] - turn, ports_rad[p])))
+        index.append(min(others, key=lambda i: angdiff(seen_rad[i] - turn, ports_rad[p])))
     return index
 
-
-def _angdiff(a: float, b: float) -> float:
-    return abs((a - b + math.pi) % TAU - math.pi)
