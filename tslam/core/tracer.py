@@ -89,12 +89,7 @@ class Tracer:
                 # boundary_clearance_m + 0.1): backed off, the robot would trace into it
                 # again. fig16 seed 7 touched the indent's back wall eleven times so.
                 self.s.boundary_armed = True
-            self.s.behaviour = Behaviour.BACKOFF
-            self.s.entry = None
-            self.s.since = now_s
-            self.s.depart_from = (odo.x_m, odo.y_m)
-            self.s.depart_dir = -self.s.last_v_sign
-            self.s.escape = None
+            self._back_off(odo, now_s)
         elif status.stall and self.s.behaviour is Behaviour.BACKOFF:
             # Backing off straight pressed into something too: in a corner, against one wall
             # with the wheels turned a degree into it, the base moves neither way, and
@@ -113,6 +108,18 @@ class Tracer:
         if twist.v_mps != 0.0:
             self.s.last_v_sign = math.copysign(1.0, twist.v_mps)
         return twist, events
+
+    def _back_off(self, odo: Odometry, now: float, scan: SonarScan | None = None) -> None:
+        """Reverse from where the base was going (``backoff_m``), then re-access; with
+        ``scan``, move away from the transducers that read their minimum range instead."""
+        s = self.s
+        s.behaviour = Behaviour.BACKOFF
+        s.entry = None
+        s.since = now
+        s.depart_from = (odo.x_m, odo.y_m)
+        s.depart_dir = -s.last_v_sign
+        away = _away_from_touch(scan) if scan is not None else None
+        s.escape = to_odom(away, odo) if away is not None else None
 
     def _contact_point(self, scan: SonarScan, odo: Odometry) -> tuple[float, float]:
         """Where the base touched something (odometry frame): the echo of a transducer at its
@@ -239,10 +246,23 @@ class Tracer:
         if (
             s.boundary_armed
             and obs[0].distance_m < p.boundary_clearance_m
-            and (obs[0].distance_m < p.pinch_clearance_m or self._corner_ahead(odo))
+            and (
+                obs[0].distance_m < p.pinch_clearance_m
+                or self._corner_ahead(odo)
+                or self._touching_ahead(odo)
+            )
         ):
             s.boundary_armed = False  # until the robot is clear of this corner again
             self._boundary(obs[0].distance_m, odo, now, events)
+            return None
+        if obs[0].distance_m < p.boundary_clearance_m and self._touching_ahead(odo):
+            # Back into the corner just turned back from (the trace law's way flips where
+            # the two walls are nearly symmetric), with the boundary rule not re-armed: back
+            # off as from a touch, before touching (fig1 seed 35).
+            s.boundary_armed = True
+            # Away from what it nearly touches, not in reverse: the robot may face out of
+            # the corner while the tangent points in.
+            self._back_off(odo, now, self._scan)
             return None
         if obs[1].distance_m - obs[0].distance_m > p.off_edge_m and p.doorway_pairs:
             obs = self._doorway(obs, odo, now)
@@ -364,6 +384,17 @@ class Tracer:
         r = np.hypot(x, y)
         ahead = (x * tx + y * ty) >= r * math.cos(p.corner_ahead_rad)
         return bool(np.any(ahead & (r < p.corner_ahead_m)))
+
+    def _touching_ahead(self, odo: Odometry) -> bool:
+        """Whether a transducer within ``pinch_touch_rad`` of the edge's way reads its minimum
+        range: something ahead nearer than the ring can measure."""
+        p, scan = self.p, self._scan
+        if p.pinch_touch_rad <= 0.0 or scan is None or self.s.tangent is None:
+            return False
+        tx, ty = to_robot(self.s.tangent, odo)
+        near = at_minimum_range(scan)
+        ahead = np.cos(scan.yaw_rad) * tx + np.sin(scan.yaw_rad) * ty >= math.cos(p.pinch_touch_rad)
+        return bool(np.any(near & ahead))
 
     def _pair(
         self, obs: list[Obstacle], odo: Odometry, prev: tuple[float, float] | None
