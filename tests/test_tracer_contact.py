@@ -138,10 +138,10 @@ def test_a_contact_while_tracing_arms_the_boundary_rule_again(before, armed):
 
 
 def test_fig16_seed_7_touches_the_indent_once():
-    # Without the rule that ends an edge on walls nearer than the ring measures (stop 59): the
-    # contact re-arms the boundary rule, once is all. With it, the indent is never touched.
-    before = replace(STOP41, pinch_touch_rad=0.0)
-    run = explore("fig16", 7, "paper", duration_s=150.0, progress=False, tracer_params=before)
-    assert run.backend.robot.collisions == 1
+    # The contact re-arms the boundary rule: once is all. With the switch that ends an edge on
+    # walls nearer than the ring measures (``touch_pinch``), the indent is never touched.
     run = explore("fig16", 7, "paper", duration_s=150.0, progress=False, tracer_params=STOP41)
+    assert run.backend.robot.collisions == 1
+    touch = replace(STOP41, pinch_touch_rad=math.radians(80.0))
+    run = explore("fig16", 7, "paper", duration_s=150.0, progress=False, tracer_params=touch)
     assert run.backend.robot.collisions == 0

@@ -1,5 +1,6 @@
 """An edge that runs into walls nearer than the ring can measure ends there, before the base
-touches them (``TracerParams.pinch_touch_rad``).
+touches them (``TracerParams.pinch_touch_rad``, the switch ``touch_pinch``; off by default, as
+it costs completed maps: README, stop 59).
 
 The Nomad's ring reads nothing under 0.15 m from a transducer, 0.38 m from the centre: closer
 walls read as 0.38 m, and the pinch rule (0.3 m) never fired on them. Where the edge ran

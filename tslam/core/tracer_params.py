@@ -157,12 +157,16 @@ class TracerParams:
     # ... or the gap is too narrow to pass anyway (a Nomad ring reads nothing under 0.38 m, so
     # there the bumper answers first; a ring that reads closer ends the edge here).
     pinch_clearance_m: float = 0.3
-    # ... or a transducer within this of the way ahead reads its minimum range (0: no). The
-    # ring reads nothing under 0.38 m from the centre, so closing walls read 0.38 m and the
-    # pinch rule above never saw them; where the corner between them fell between two beams
-    # (a desk's side and the wall behind it), the base touched them in 29 of 240 runs
-    # (fig1-fig16, seeds 1-48; tests/test_tracer_pinch.py).
-    pinch_touch_rad: float = math.radians(80.0)
+    # ... or a transducer within this of the way ahead reads its minimum range (0: no; the
+    # switch ``touch_pinch`` sets 80 degrees). The ring reads nothing under 0.38 m from the
+    # centre, so closing walls read 0.38 m and the pinch rule above never saw them; where the
+    # corner between them fell between two beams (a desk's side and the wall behind it), the
+    # base touched them: 33 contacts in 240 runs (fig1-fig16, seeds 1-48), 18 with the rule
+    # at 80 degrees. Off: those runs completed 167 maps against 179 (fig13 28 against 33, the
+    # five lost to copies multiplying; fig14 2 against 9, mostly out of time). At 50 degrees
+    # fig13 completed 29 with 2 contacts against 11, fig14 5 with 12 against 14
+    # (tests/test_tracer_pinch.py).
+    pinch_touch_rad: float = 0.0
     depart_m: float = 0.15  # leave a meet point along its departure before tracing
     # ... and on along it, up to this far, until the ring sees the edge's two obstacles on
     # either side of the way: through a doorway the ring's first view merges the two jambs
