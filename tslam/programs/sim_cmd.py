@@ -34,8 +34,9 @@ from tslam.programs.sim_backends import (
     open_backend,
 )
 
-#: Simulated seconds allowed when ``--duration`` is not given: far more than any built-in
-#: world needs, so a run that has not finished by then is stuck and says so.
+#: Simulated seconds allowed when ``--duration`` is not given: far more than any of the
+#: paper's worlds needs, so a run of one that has not finished by then is stuck and says so.
+#: A generated office floor needs more: its GVG is 1.6-1.8 km, 2.2-2.6 hours to trace once.
 DEFAULT_LIMIT_S = 4 * 3600.0
 
 
