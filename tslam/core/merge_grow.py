@@ -22,10 +22,10 @@ from __future__ import annotations
 import math
 
 from tslam.core.explorer_state import ExplorerState, angdiff
+from tslam.core.frames import TAU
 from tslam.core.localize import Hypothesis
 from tslam.core.topomap import TopoMap
 
-TAU = 2.0 * math.pi
 #: Nodes one merge may read again so: fig14 has two such pairs.
 MAX_GROWS = 2
 #: Two edges read as one departure read it between them, to within this.

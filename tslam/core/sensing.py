@@ -156,6 +156,10 @@ class RingSensor:
         # The last update's minima and distances, for ``apart`` (asked for now and then).
         self._found: tuple[list[tuple[Obstacle, int, int]], np.ndarray] | None = None
         self._merged = 0  # how many obstacles the last update reported
+        # ``apart``'s answer for the last update, once asked (the tracer asks up to three
+        # times a cycle).
+        self._apart: list[Obstacle] | None = None
+        self._apart_asked = False
 
     def update(self, scan: SonarScan, odo: Odometry) -> list[Obstacle]:
         """Obstacles seen from the pose ``odo``, nearest first."""
@@ -164,6 +168,7 @@ class RingSensor:
         self.points = pts
         p = self.p
         self._found = found = _minima(pts, p.plateau_m)
+        self._apart_asked = False
         if found is None:
             self._merged = 0
             return []
@@ -176,6 +181,12 @@ class RingSensor:
         """The last update's obstacles with two close minima kept apart where the ring sees
         between them (``SensingParams.view_ratio``: a doorway's jambs), nearest first; None
         if that keeps none apart."""
+        if not self._apart_asked:
+            self._apart_asked = True
+            self._apart = self._kept_apart()
+        return self._apart
+
+    def _kept_apart(self) -> list[Obstacle] | None:
         p = self.p
         if self._found is None or p.view_ratio <= 0.0:
             return None

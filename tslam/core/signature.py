@@ -16,11 +16,10 @@ port ``(j + k) % degree`` of the second.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-TAU = 2.0 * math.pi
+from tslam.core.frames import TAU
 
 
 @dataclass(frozen=True)

@@ -30,9 +30,9 @@ from typing import Any, NamedTuple
 
 import networkx as nx
 
+from tslam.core.frames import TAU
 from tslam.core.signature import Signature, rotations
 
-TAU = 2.0 * math.pi
 KINDS = ("meet", "boundary")
 FORMAT = "tslam-map"
 FORMAT_VERSION = 1

@@ -243,19 +243,17 @@ class Tracer:
             s.armed = not laws.equidistant(obs, 3, p.arm_tol_m) or self._new_meet_ahead(obs, odo)
         if obs[0].distance_m > p.boundary_clearance_m + 0.1:
             s.boundary_armed = True
+        close = obs[0].distance_m < p.boundary_clearance_m
+        touching = close and self._touching_ahead(odo)
         if (
             s.boundary_armed
-            and obs[0].distance_m < p.boundary_clearance_m
-            and (
-                obs[0].distance_m < p.pinch_clearance_m
-                or self._corner_ahead(odo)
-                or self._touching_ahead(odo)
-            )
+            and close
+            and (obs[0].distance_m < p.pinch_clearance_m or self._corner_ahead(odo) or touching)
         ):
             s.boundary_armed = False  # until the robot is clear of this corner again
             self._boundary(obs[0].distance_m, odo, now, events)
             return None
-        if obs[0].distance_m < p.boundary_clearance_m and self._touching_ahead(odo):
+        if touching:
             # Back into the corner just turned back from (the trace law's way flips where
             # the two walls are nearly symmetric), with the boundary rule not re-armed: back
             # off as from a touch, before touching (fig1 seed 35).

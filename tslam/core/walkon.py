@@ -20,10 +20,9 @@ import math
 from dataclasses import dataclass
 
 from tslam.core.edgepaths import EdgePath
+from tslam.core.frames import TAU
 from tslam.core.localize import Tolerances
 from tslam.core.topomap import TopoMap
-
-TAU = 2.0 * math.pi
 
 
 @dataclass(frozen=True)
