@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -68,7 +69,7 @@ _SETS: dict[str, dict[str, bool | float]] = {
     "jump": {"swing_jump_m": 0.15},  # on by default since stop 49
     "recess": {"sweep_recess": True, "place_corners": True},  # on by default since stop 36
     "contact_memory": {"contact_hold_s": 60.0},
-    "touch_pinch": {"pinch_touch_rad": 1.396},  # 80 degrees (stop 59)
+    "touch_pinch": {"pinch_touch_rad": math.radians(80.0)},  # stop 59
 }
 SWITCHES = tuple(_SETS)
 
