@@ -665,7 +665,7 @@ class Tracer:
             back = math.atan2(-tangent[1], -tangent[0]) % TAU
             arrival = min(range(len(deps)), key=lambda k: angdiff(deps[k], back))
         if way_in is None and p.unseen_way_in_rad > 0.0 and rel is None:
-            way_in = self._way_in(odo)
+            way_in = self._unseen_way_in(odo)
         if way_in is not None and min(angdiff(d, way_in) for d in deps) > p.unseen_way_in_rad:
             deps = sorted((*deps, way_in))
             arrival = deps.index(way_in)
@@ -742,14 +742,18 @@ class Tracer:
             return tangent
         return dx / n, dy / n
 
-    def _way_in(self, odo: Odometry) -> float | None:
+    def _unseen_way_in(self, odo: Odometry) -> float | None:
         """The bearing (odometry frame) from here back along the traced way in to a point
-        ``way_in_m`` off, if the robot traced it lately; None if not."""
+        ``way_in_m`` off, if the robot traced it lately and about straight; None if not."""
         p = self.p
         for d, x, y in reversed(self.s.trail):
-            if odo.distance_m - d > 2.5 * p.way_in_m:
+            travelled = odo.distance_m - d
+            if travelled > 2.5 * p.way_in_m:
                 return None
-            if math.hypot(x - odo.x_m, y - odo.y_m) >= p.way_in_m:
+            chord = math.hypot(x - odo.x_m, y - odo.y_m)
+            if chord >= p.way_in_m:
+                if travelled > p.way_in_bent * chord:
+                    return None
                 return math.atan2(y - odo.y_m, x - odo.x_m) % TAU
         return None
 

@@ -236,6 +236,12 @@ class TracerParams:
     # drift paper) the way in was never more than 30 degrees off a departure (0: off).
     unseen_way_in_rad: float = math.radians(35.0)
     way_in_m: float = 1.0
+    # ... read only from a trail about straight: no longer than this times the chord. Where
+    # the trail bent (fig14 seed 1, 1.41 times the chord, passing the 0.53 m pair of meet
+    # points 6 and 7) the chord was 41 degrees off the edge the robot came by, and the rule
+    # added a fifth edge to a place of degree four: a copy of it, never recognised. Into
+    # office:1's room (seeds 1-6) the trail was at most 1.12 times the chord.
+    way_in_bent: float = 1.25
     # Into a room through a door in the middle of a wall: past the door the ring merges its
     # jambs behind the robot into one obstacle, the pair is lost, and access drives on
     # straight away from them until the far wall ahead is as far. There the door's edge
