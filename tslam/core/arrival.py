@@ -109,6 +109,17 @@ class Arrival(ExplorerState):
             self.span[node] = max(self.span.get(node, 0.0), moved)
         return found
 
+    def _beside(self, node: int) -> bool:
+        """Whether ``node`` has a mapped edge under ``grow_beside_m`` to another meet point."""
+        n = self.map.node(node)
+        for p, e in enumerate(n.ports):
+            if e is None or self.map.edge(e).length_m >= self.p.grow_beside_m:
+                continue
+            far = self.map.edge(e).other_end(node, p)[0]
+            if far != node and self.map.node(far).kind == "meet":
+                return True
+        return False
+
     def _reread(
         self,
         ev: MeetPointReached,
@@ -359,7 +370,8 @@ class Arrival(ExplorerState):
             )
             # Each port on a departure of its own, or the reading says nothing of the place.
             distinct = len(set(pm.index)) == len(pm.index)
-            if self.p.grow_place and ev.degree > self.map.node(w).degree and distinct:
+            grow = distinct and ev.degree > self.map.node(w).degree and not self._beside(w)
+            if self.p.grow_place and grow:
                 # The edge the reading has more is the place's, from its other point, which
                 # the map has not seen: fig13 seed 3's 0.29 m pair, mapped from its west
                 # point, read from the east with the east point's dead end besides; left
