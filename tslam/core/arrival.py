@@ -81,6 +81,10 @@ class Arrival(ExplorerState):
                 if placed is not None:
                     return self._spans(node, moved, placed)
             return self._spans(node, moved, self._reread(ev, node, deps, pm, moved))
+        # Or at the place's other point: fig13 seed 5 went 0.45 m out of the 0.29 m pair and
+        # back, homed 0.35 m from where it had left, read the place's four edges as before,
+        # and mapped it again. The bearings below tell a twin junction that far.
+        reach = max(reach, p.bounce_place_m)
         if (far and length > p.bounce_far_m) or moved > reach:
             return None
 

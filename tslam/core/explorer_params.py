@@ -84,6 +84,8 @@ class ExplorerParams:
     # placing it within bounce_m and this fraction of the way (0: none).
     bounce_far_m: float = 20.0
     bounce_rel: float = 0.02
+    # ... and at least this far: the other point of a close pair, read with the same edges.
+    bounce_place_m: float = 0.45
     bounce_retries: int = 1
     # A dead end reached again by another departure is the one mapped if dead reckoning
     # puts it this close to where the robot last was there, whichever way it went out
@@ -132,6 +134,11 @@ class ExplorerParams:
     # Which departure the robot went out by: the bearing to where its way is first this far
     # from the node (``_left_by``).
     left_by_m: float = 0.8
+    # ... or, arrived at a meet point before the way was that far out, the bearing to where
+    # the robot stands, if at least this far (0: none).
+    left_by_short_m: float = 0.3
+    # ... from the last time the way was within this of the node (0: from the start).
+    left_by_back_m: float = 0.3
     # An arrival after an unexplored departure whose way out went clearly (by this margin)
     # along another unexplored departure ends that one's edge (``_departure_taken``).
     departure_taken: bool = True

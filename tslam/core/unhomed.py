@@ -66,13 +66,15 @@ class Unhomed(ExplorerState):
     def _left_by(self, f: int) -> int | None:
         """The port of ``f``, the node just left, that the robot's recorded way went out by:
         the departure nearest the bearing to where the way is first ``left_by_m`` from the
-        node, by dead reckoning over a metre or two. None if the way does not say."""
-        out = self._way_out(f)
+        node, by dead reckoning over a metre or two, or, at a meet point reached sooner, to
+        where the robot stands (``left_by_short_m``). None if the way does not say."""
+        out = self._way_out(f, short=True)
         return None if out is None else nearest(*out)
 
-    def _way_out(self, f: int) -> tuple[float, list[float]] | None:
+    def _way_out(self, f: int, short: bool = False) -> tuple[float, list[float]] | None:
         """The bearing of the recorded way out of ``f`` (``_left_by``) and the bearing of each
-        of ``f``'s ports as read on that visit, odometry frame."""
+        of ``f``'s ports as read on that visit, odometry frame; ``short``: to where the robot
+        stands if the way is not ``left_by_m`` out."""
         lv, odo = self._last_visit, self._odo
         if lv is None or lv[0] != f or odo is None:
             return None
@@ -80,8 +82,20 @@ class Unhomed(ExplorerState):
         if path is None:
             return None
         _, deps, pm, x, y = lv
-        reach = self.p.left_by_m
-        out = next(((u, v) for _, u, v in path.points if math.hypot(u - x, v - y) >= reach), None)
+        reach, back = self.p.left_by_m, self.p.left_by_back_m
+        points = [(u, v) for _, u, v in path.points]
+        # Out and back through the node: the way out is the one after (fig13 seed 4, out
+        # 0.9 m along a fourth edge true meet point 0 was once read with, back through it and
+        # on along its edge south, to a place mapped again as new).
+        near = [k for k, (u, v) in enumerate(points) if math.hypot(u - x, v - y) < back]
+        points = points[near[-1]:] if near else points
+        out = next(((u, v) for u, v in points if math.hypot(u - x, v - y) >= reach), None)
+        # Arrived before the way was that far out: a close pair's short edge (fig13 seed 5:
+        # out of true meet point 2 by the departure to a dead end, the robot swung onto the
+        # 0.53 m edge to meet point 3, and mapped it again). Where it stands now says.
+        least = self.p.left_by_short_m
+        if out is None and short and least > 0.0 and math.hypot(odo.x_m - x, odo.y_m - y) >= least:
+            out = (odo.x_m, odo.y_m)
         if out is None:
             return None
         ports = self._port_bearings_read(f, deps, pm) or [deps[i] for i in pm.index]
