@@ -52,7 +52,8 @@ def test_homed_at_the_other_point_on_the_way_the_robot_goes_on_by_its_departure(
 
 @pytest.mark.parametrize("same", [True, False])
 def test_the_other_point_read_as_the_place_is_the_same_node(same):
-    ex, node, ports = at_the_place(ExplorerParams(place_hop_same=same))
+    # Without a bounce as far as the other point (``bounce_place_m``), which is one node too.
+    ex, node, ports = at_the_place(ExplorerParams(place_hop_same=same, bounce_place_m=0.0))
     # From the weak point the place's four edges leave a few degrees otherwise.
     ex._odo = Odometry(-0.34, 0.0, 0.0, 0.0, 0.34, 0.34)
     ex._choose(meet(-0.34, 0.0, [62, 152, 208, 298], 62, 0.34))
@@ -61,6 +62,14 @@ def test_the_other_point_read_as_the_place_is_the_same_node(same):
     if same:
         assert ex.here == node and ex.span[node] == pytest.approx(0.34)
         assert ex.leaving == (node, ports[160])
+
+
+def test_the_other_point_read_as_the_place_is_a_bounce_without_place_hop_same():
+    ex, node, ports = at_the_place(ExplorerParams(place_hop_same=False))
+    ex._odo = Odometry(-0.34, 0.0, 0.0, 0.0, 0.34, 0.34)
+    ex._choose(meet(-0.34, 0.0, [62, 152, 208, 298], 62, 0.34))
+    assert [n.id for n in ex.map.nodes() if n.kind == "meet"] == [node]
+    assert ex.bounces == {(node, ports[160]): 1}
 
 
 @pytest.mark.parametrize("slack", [True, False])

@@ -22,10 +22,11 @@ class ExplorerParams:
     # ... and read with an edge more, the node becomes the place read, the edge more
     # unexplored (False: the reading's edge more is left out).
     grow_place: bool = True
-    # ... unless the node has a mapped edge this short to another meet point: that point is
-    # a place of its own, and the edge more is its edge, heard past it (fig13 seed 9: the
-    # 0.53 m pair of true meet points 2 and 3, mapped as two nodes, the first then read with
-    # four edges and grown; arriving by its true three, the robot mapped it again). 0: off.
+    # ... unless the node has a mapped edge this short (but ``place_hop_m`` or longer) to
+    # another meet point: that point is a place of its own, and the edge more is its edge,
+    # heard past it (fig13 seed 9: the 0.53 m pair of true meet points 2 and 3, mapped as
+    # two nodes, the first then read with four edges and grown; arriving by its true three,
+    # the robot mapped it again). 0: off.
     grow_beside_m: float = 0.8
     # Past the node expected, a node one edge further is recognised by signature and length
     # only if no unexplored departure of the node passed could have led on instead (False:
