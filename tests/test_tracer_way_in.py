@@ -5,7 +5,7 @@ door: ``test_tracer_room_door.py``), so a way in far from every departure seen i
 one. The way in is the chord back to where the robot was 1 m off. Where the trail bent, that
 chord is no edge's direction: fig14 seed 1 came back to the 0.53 m pair of true meet points 6
 and 7 along a trail 1.41 times its chord, 41 degrees off the edge it had come by, and the
-place, read with a fifth edge, had no look-alike and went into the map twice.
+meet point, read with a fourth edge, had no look-alike and went into the map twice.
 """
 
 from __future__ import annotations
@@ -58,8 +58,8 @@ def test_a_trail_bent_within_the_last_metre_is_trusted_up_to_way_in_bent(turn_de
 
 
 def test_fig14_seed_1_keeps_the_close_pair_one_place():
-    """Seed 1 at drift paper: with the bend ignored, the pair is read with five edges at
-    1325 s and mapped twice; with it, no copy by 1400 s."""
+    """Seed 1 at drift paper: with the bend ignored, meet point 6 is read with four edges
+    at 1325 s and mapped twice; with it, no copy by 1400 s."""
     runs = {}
     for bent in (TracerParams().way_in_bent, math.inf):
         run = explore("fig14", 1, "paper", 1400.0, progress=False,

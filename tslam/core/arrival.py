@@ -118,10 +118,10 @@ class Arrival(ExplorerState):
         is wide (``place_hop_m``: fig16's weak meet point, 0.41 m from the corridor's, is
         the same place) and shorter than ``grow_beside_m``."""
         n, lo, hi = self.map.node(node), self.p.place_hop_m, self.p.grow_beside_m
-        for p, e in enumerate(n.ports):
+        for port, e in enumerate(n.ports):
             if e is None or not lo <= self.map.edge(e).length_m < hi:
                 continue
-            far = self.map.edge(e).other_end(node, p)[0]
+            far = self.map.edge(e).other_end(node, port)[0]
             if far != node and self.map.node(far).kind == "meet":
                 return True
         return False

@@ -239,7 +239,7 @@ class TracerParams:
     # ... read only from a trail about straight: no longer than this times the chord. Where
     # the trail bent (fig14 seed 1, 1.41 times the chord, passing the 0.53 m pair of meet
     # points 6 and 7) the chord was 41 degrees off the edge the robot came by, and the rule
-    # added a fifth edge to a place of degree four: a copy of it, never recognised. Into
+    # added a fourth edge to a meet point of three: a copy of it, never recognised. Into
     # office:1's room (seeds 1-6) the trail was at most 1.12 times the chord.
     way_in_bent: float = 1.25
     # Into a room through a door in the middle of a wall: past the door the ring merges its
