@@ -59,7 +59,10 @@ class Arrival(ExplorerState):
         # good over an edge (section V-C), places where it left (fig12 seed 2: 9.3 m out and
         # back along its long edge, and the junction was mapped again).
         far = length > p.bounce_length_m
-        reach = p.bounce_m + (p.bounce_rel * length if far else 0.0)
+        # Or at the place's other point: fig13 seed 5 went 0.45 m out of the 0.29 m pair and
+        # back, homed 0.35 m from where it had left, read the place's four edges as before,
+        # and mapped it again. The bearings below tell a twin junction that far.
+        reach = max(p.bounce_m + (p.bounce_rel * length if far else 0.0), p.bounce_place_m)
         if node != self.leaving[0] or not self.map.has_node(node):
             return None
         moved = math.hypot(ev.x_m - x, ev.y_m - y)
@@ -81,10 +84,6 @@ class Arrival(ExplorerState):
                 if placed is not None:
                     return self._spans(node, moved, placed)
             return self._spans(node, moved, self._reread(ev, node, deps, pm, moved))
-        # Or at the place's other point: fig13 seed 5 went 0.45 m out of the 0.29 m pair and
-        # back, homed 0.35 m from where it had left, read the place's four edges as before,
-        # and mapped it again. The bearings below tell a twin junction that far.
-        reach = max(reach, p.bounce_place_m)
         if (far and length > p.bounce_far_m) or moved > reach:
             return None
 
