@@ -107,6 +107,32 @@ def test_a_stretch_along_other_walls_half_way_is_not_the_edge():
     assert odo.length_to(6.0, 0.0) == pytest.approx(6.0, abs=0.05)
 
 
+@pytest.mark.parametrize("back_m", [0.3, 0.0])
+def test_out_along_another_edge_and_back_through_the_node_is_not_the_edge(back_m):
+    """fig13 seed 1 at drift none, 765-807 s: sent along one edge, the robot traced 0.8 m of
+    another, came back 0.22 m past the junction it had left and went on along the first;
+    with the whole way in the chain, 3.25 m was measured for an edge of 2.25."""
+    odo = EdgeOdometer(back_m=back_m)
+    odo.start(0.0, 0.0)
+    travelled = drive(odo, line((-0.25, 0.1), (-0.8, 0.35), 41), np.zeros((41, 2)), 0.27)
+    # Back by access (off the edge: no points), then along the edge sent along.
+    travelled += 0.85
+    drive(odo, line((0.02, 0.24), (0.7, 2.1)), np.zeros((101, 2)), travelled)
+    length = odo.length_to(0.7, 2.1)
+    if back_m:
+        assert length == pytest.approx(math.hypot(0.7, 2.1), abs=0.05)
+    else:  # the old chain: the way out and back is measured too
+        assert length > math.hypot(0.7, 2.1) + 0.8
+
+
+def test_a_way_that_never_went_out_is_not_restarted_near_its_start():
+    """Tracing begins a few decimetres from the node it left: that is no way back."""
+    odo = EdgeOdometer(back_m=0.3)
+    odo.start(0.0, 0.0)
+    drive(odo, line((0.0, 0.1), (0.0, 3.0)), np.zeros((101, 2)))
+    assert odo.length_to(0.0, 3.0) == pytest.approx(3.0, abs=0.02)
+
+
 def test_a_right_angle_bend_is_kept():
     odo = EdgeOdometer()
     odo.start(0.0, 0.0)

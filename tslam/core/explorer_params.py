@@ -38,6 +38,15 @@ class ExplorerParams:
     # paper, 3000 s: 34 of 60 runs complete against 32 (fig13 seeds 4 and 9), 1053 duplicate
     # nodes against 1164 (README, stop 45; before ``look_alike_place``).
     predicted_place: bool = True
+    # ... unless some hypothesis fits it as read, one edge past the node it predicts
+    # (``cut_past``): fig13 seed 3 at drift none came through true meet point 3 unhomed to
+    # its pair's other point, 0.53 m on; read as another place with an edge fewer, which a
+    # rival predicted, it refuted the true hypothesis. False: that reading stands.
+    predicted_past: bool = True
+    # A prediction whose node the reading is not, after an edge as long as predicted, may
+    # have gone one edge past it, if the two edges' length fits as well (False: only after
+    # one longer than predicted).
+    past_within_slack: bool = True
     # ... and a new node that looks like no old one as read, but like one old node with an
     # edge fewer, is read as that one, which it may be (``_as_look_alike``). Over the 60 runs
     # above: 998 duplicate nodes against 1053, 46 covering every place and edge against 45,

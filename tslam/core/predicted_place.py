@@ -57,8 +57,8 @@ class PredictedPlace(ExplorerState):
         length: float | None,
     ) -> AsPlace | None:
         """``ev`` read as the old node every hypothesis that predicts this arrival predicts;
-        None unless no hypothesis fits the reading as it is and exactly one old node fits it
-        with one edge more or fewer."""
+        None unless no hypothesis fits the reading as it is (at the node it predicts, or one
+        edge past it) and exactly one old node fits it with one edge more or fewer."""
         a = ev.arrival_index
         if not self.p.predicted_place or a is None or length is None or self.unsure_departure:
             return None
@@ -70,6 +70,10 @@ class PredictedPlace(ExplorerState):
                 continue
             if arrival_matches(self.map, seen, a, pred, length, tol) is not None:
                 return None
+            if self.p.predicted_past and self.p.cut_past:
+                went = self._past_a_junction(h, pred, seen, a, length)
+                if went is not None and went.beyond is not None:
+                    return None
             pm = self._read_otherwise(ev, pred.node, pred.arrival_port, length, pred.length_m)
             if pm is not None:
                 fits.add((pred.node, pred.arrival_port, pm))

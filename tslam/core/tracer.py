@@ -63,6 +63,7 @@ class Tracer:
         self.sensor = RingSensor(self.p.sensing)
         self.s = TracerState()
         self.s.odometer.detour_ratio = self.p.edge_spike_ratio
+        self.s.odometer.back_m = self.p.edge_back_m
         self.obstacles: list[Obstacle] = []
         self._scan: SonarScan | None = None
 

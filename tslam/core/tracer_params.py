@@ -216,6 +216,9 @@ class TracerParams:
     # An edge's length drops the points its chain goes out to and comes back from, at this
     # ratio of chords (edgelength.py; inf: none dropped, as up to stop 30).
     edge_spike_ratio: float = 1.5
+    # ... and begins again where the way came back within this of the node it left, from
+    # half a metre or more out (edgelength.py; 0: never).
+    edge_back_m: float = 0.3
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
     rejected_meet_m: float = 0.5  # ... or this far, from one the sweep rejected ...
     fast_ring_firings: float = 8.0  # ... on a ring whose transducers each fired this often
