@@ -133,6 +133,17 @@ def test_a_way_that_never_went_out_is_not_restarted_near_its_start():
     assert odo.length_to(0.0, 3.0) == pytest.approx(3.0, abs=0.02)
 
 
+def test_an_edge_round_to_its_own_node_is_not_restarted_at_its_end():
+    """An edge that leaves a node and comes round an obstacle back to it passes close to
+    its start only at its end, from far out: that is the edge, not a way back."""
+    odo = EdgeOdometer(back_m=0.3)
+    odo.start(0.0, 0.0)
+    th = np.linspace(0.05, 2.0 * math.pi - 0.05, 400)
+    loop = np.column_stack([1.2 * np.sin(th), 1.2 * (1.0 - np.cos(th))])  # a circle via (0, 2.4)
+    drive(odo, loop, np.zeros((400, 2)))
+    assert odo.length_to(0.0, 0.0) > 2.0 * math.pi * 1.2 * 0.95
+
+
 def test_a_right_angle_bend_is_kept():
     odo = EdgeOdometer()
     odo.start(0.0, 0.0)

@@ -38,5 +38,5 @@ def test_with_the_way_out_and_back_measured_the_fragment_stays_apart():
     rep, notes, lengths = _run(edge_back_m=0.0)
     assert not any(t.startswith("loop closed: 23=1") for t in notes)
     assert rep["duplicate_nodes"] >= 3
-    assert len(lengths[frozenset((14, 16))]) == 1  # traced again, but as another edge:
-    assert lengths[frozenset((24, 25))][0] > 3.0  # its copy, with the way out and back
+    assert len(lengths[frozenset((14, 16))]) == 1  # traced once: the second time went
+    assert lengths[frozenset((24, 25))][0] > 3.0  # into its copy, with the way out and back

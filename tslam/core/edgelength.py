@@ -56,11 +56,13 @@ class EdgeOdometer:
     # or 0.3; an edge shorter than twice this is measured end to end, which a close pair's
     # straight edge is.
     end_clear_m: float = 0.25
-    # Back this close to where the edge began, having been ``out_m`` from it, the edge
-    # begins again (0: never).
+    # Back this close to where the edge began, having been ``out_m`` but never ``far_m``
+    # from it, the edge begins again (0: never). Further out, the way may be an edge that
+    # comes round to its own node (round a pillar), whose end is no way back.
     back_m: float = 0.0
     out_m: float = 0.5
-    _out: bool = field(default=False, init=False)
+    far_m: float = 1.5
+    _far: float = field(default=0.0, init=False)  # the furthest the way has been from its node
     _chain: list[Point] = field(default_factory=list, init=False)
     # The pending average: sum of x, sum of y, count; and the encoder distance it began at.
     _sum: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0], init=False)
@@ -70,7 +72,7 @@ class EdgeOdometer:
         """A node at ``(x, y)`` (odometry frame): an edge begins here."""
         self._chain = [(x_m, y_m)]
         self._sum = [0.0, 0.0, 0.0]
-        self._out = False
+        self._far = 0.0
 
     def on_edge(self, x_m: float, y_m: float, distance_m: float, step: Point) -> None:
         """Tracing at ``(x, y)``; ``step`` (odometry frame) takes the robot onto the edge;
@@ -79,9 +81,8 @@ class EdgeOdometer:
             return
         if self.back_m > 0.0:
             off = math.dist((x_m, y_m), self._chain[0])
-            if off >= self.out_m:
-                self._out = True
-            elif off < self.back_m and self._out:
+            self._far = max(self._far, off)
+            if off < self.back_m and self.out_m <= self._far < self.far_m:
                 self.start(*self._chain[0])
         if math.hypot(*step) > self.max_step_m:
             return

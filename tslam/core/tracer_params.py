@@ -217,7 +217,7 @@ class TracerParams:
     # ratio of chords (edgelength.py; inf: none dropped, as up to stop 30).
     edge_spike_ratio: float = 1.5
     # ... and begins again where the way came back within this of the node it left, from
-    # half a metre or more out (edgelength.py; 0: never).
+    # half a metre to 1.5 m out (edgelength.py; 0: never).
     edge_back_m: float = 0.3
     new_meet_m: float = 0.15  # a meet point estimate this far from the last is a new one
     rejected_meet_m: float = 0.5  # ... or this far, from one the sweep rejected ...
