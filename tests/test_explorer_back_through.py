@@ -13,17 +13,13 @@ edge now begins again where the way came back through the node (``TracerParams.e
 
 from __future__ import annotations
 
-from dataclasses import replace
-
-from tslam.core.tracer_params import TracerParams
-from tslam.programs.sim_cmd import explore, report
+from tests.explored import explored
 
 
 def _run(**changes: float) -> tuple[dict, list[str], dict[frozenset[int], tuple[float, ...]]]:
-    tracer = replace(TracerParams(), **changes)
-    run = explore("fig13", 1, "none", 830.0, progress=False, tracer_params=tracer)
+    rep, notes, run = explored("fig13", 1, "none", 830.0, tracer=changes)
     lengths = {frozenset((e.u, e.v)): e.lengths_m for e in run.explorer.map.edges()}
-    return report(run, "fig13", 1, "none"), [n.text for n in run.explorer.notes], lengths
+    return rep, notes, lengths
 
 
 def test_the_way_back_through_the_node_is_left_out_and_the_fragment_merges():

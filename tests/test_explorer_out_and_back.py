@@ -11,16 +11,12 @@ be held is tried again and given up.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
-from tslam.core.explorer import ExplorerParams
-from tslam.programs.sim_cmd import explore, report
+from tests.explored import explored
 
 
 def _run(**changes: float) -> tuple[dict, list[str]]:
-    params = replace(ExplorerParams(), **changes)
-    run = explore("fig13", 4, "paper", 1000.0, progress=False, params=params)
-    return report(run, "fig13", 4, "paper"), [n.text for n in run.explorer.notes]
+    rep, notes, _ = explored("fig13", 4, "paper", 1000.0, changes)
+    return rep, notes
 
 
 def test_back_through_the_node_the_place_beyond_is_recognised():

@@ -12,16 +12,12 @@ as far as the place's other point (``bounce_place_m``), the bearings telling a t
 
 from __future__ import annotations
 
-from dataclasses import replace
-
-from tslam.core.explorer import ExplorerParams
-from tslam.programs.sim_cmd import explore, report
+from tests.explored import explored
 
 
 def _run(duration_s: float, **changes: float) -> tuple[dict, list[str]]:
-    params = replace(ExplorerParams(), **changes)
-    run = explore("fig13", 5, "paper", duration_s, progress=False, params=params)
-    return report(run, "fig13", 5, "paper"), [n.text for n in run.explorer.notes]
+    rep, notes, _ = explored("fig13", 5, "paper", duration_s, changes)
+    return rep, notes
 
 
 def test_the_short_way_out_recognises_the_pairs_other_point():

@@ -14,18 +14,14 @@ hypothesis lives on with that edge cut, and the fragment is merged at 1053 s.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import pytest
 
-from tslam.core.explorer import ExplorerParams
-from tslam.programs.sim_cmd import explore, report
+from tests.explored import explored
 
 
 def _run(**changes: bool) -> tuple[dict, list[str]]:
-    params = replace(ExplorerParams(), **changes)
-    run = explore("fig13", 3, "none", 1320.0, progress=False, params=params)
-    return report(run, "fig13", 3, "none"), [n.text for n in run.explorer.notes]
+    rep, notes, _ = explored("fig13", 3, "none", 1320.0, changes)
+    return rep, notes
 
 
 def test_one_edge_past_the_predicted_node_the_true_hypothesis_lives_and_merges():
