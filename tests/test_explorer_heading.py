@@ -77,3 +77,39 @@ def test_fig15_mirror_image_is_not_merged():
     )
     assert any("turned further than dead reckoning drifts" in n.text for n in run.explorer.notes)
     assert report(run, "fig15", 4, "paper")["false_merges"] == 0
+
+
+def _zipped_pair(turn_deg: float) -> tuple[Explorer, int, int, int, int]:
+    """Old node c with a neighbour d along its port 0, and new node x, taken for c, with a
+    neighbour y the same way: merging x into c makes y one with d too (the merge zips along
+    the edge), and y's departures are d's turned ``turn_deg``."""
+    ex = Explorer(NOMAD200_LIMITS)
+    deps = [rad(0), rad(120), rad(240)]
+    c = ex.map.add_meet(1.2, deps, (0.0, 0.0))
+    d = ex.map.add_meet(1.3, deps, (3.0, 0.0))
+    x = ex.map.add_meet(1.2, deps, (0.0, 0.0))
+    y = ex.map.add_meet(1.3, [rad(a + turn_deg) for a in (0, 120, 240)], (3.0, 0.0))
+    ex.map.connect(c, 0, d, 1, 3.0)
+    ex.map.connect(x, 0, y, 1, 3.1)
+    ex.born = {c: 0.0, d: 1.0, x: 50.0, y: 52.0}  # 25 + 0.25 x 51 = 37.75 deg allowed
+    return ex, c, d, x, y
+
+
+def test_a_merge_that_zips_two_neighbours_turned_apart_is_refused():
+    """fig13 seed 8 at drift paper (stop 62, with a sweep change not kept): a close pair's two
+    readings, their ports matched one edge round, zipped its north and east neighbours
+    into one place, 5.2 m apart and turned 93 degrees where 46 were allowed. The pair the
+    hypothesis names fits; the one the merge makes on the way must fit too."""
+    ex, c, d, x, y = _zipped_pair(90.0)
+    assert ex._heading_fits(x, c, 0)
+    assert ex.map.signature_rotations(y, d, 0.15, math.radians(25.0))  # alike but for heading
+    assert ex._zipped_turned({x: (c, 0)}, ex._likeness()) == (y, d)
+    ex.map.connect(c, 1, x, 1, 40.0)  # the merge would make this edge come back by one port
+    assert ex._zipped_turned({x: (c, 0)}, ex._likeness()) is None  # the map refuses; not here
+    ex, c, d, x, y = _zipped_pair(10.0)
+    assert ex._zipped_turned({x: (c, 0)}, ex._likeness()) is None
+    ex, c, d, x, y = _zipped_pair(90.0)
+    ex.born[y] = 300.0  # 100 deg allowed: read far apart, dead reckoning says little
+    assert ex._zipped_turned({x: (c, 0)}, ex._likeness()) is None
+    del ex.born[y]  # read before a restart: no reading to compare
+    assert ex._zipped_turned({x: (c, 0)}, ex._likeness()) is None

@@ -5,9 +5,12 @@ old node was read, which rules out a look-alike turned too far (fig15's mirror i
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 from tslam.core.explorer_state import ExplorerState, angdiff
 from tslam.core.localize import Hypothesis
+from tslam.core.topomap import Likeness, MapError, MergePlan
+from tslam.core.zipmerge import merge_mapping
 
 
 class HeadingBounds(ExplorerState):
@@ -73,6 +76,32 @@ class HeadingBounds(ExplorerState):
         nodes, or, failing that, the first two turned apart from each other."""
         misfits = [x for x, (c, k) in sorted(h.mapping.items()) if not self._heading_fits(x, c, k)]
         return misfits or self._turned_apart(h)
+
+    def _zipped_turned(
+        self, mapping: Mapping[int, tuple[int, int]], alike: Likeness
+    ) -> tuple[int, int] | None:
+        """The first pair of meet points that merging ``mapping`` makes one beyond the pairs
+        it names (the merge zips along the edges they share) turned further from each
+        other than dead reckoning drifts between their readings; None if there is none, or
+        if the map refuses the merge (it says why when it is made). fig13 seed 8 at drift
+        paper (stop 62, with a sweep change not kept): a close pair's two readings, their
+        ports matched one edge round, made the edges to its north and east neighbours one
+        (4.05 m and 3.49 m, within the length's slack) and the neighbours one place, 5.2 m
+        apart and turned 93 degrees where 46 were allowed: a false merge."""
+        trial = self.map.copy()
+        zipped: list[tuple[int, int, int]] = []
+
+        def record(plan: MergePlan) -> None:
+            zipped.extend((d, r, k) for d, (r, k) in plan.nodes.items() if d not in mapping)
+
+        try:
+            merge_mapping(trial, mapping, alike, record)
+        except MapError:
+            return None
+        for d, r, k in sorted(zipped):
+            if d in self.born and not self._heading_fits(d, r, k):
+                return d, r
+        return None
 
     def _turned_well_beyond(self, h: Hypothesis) -> bool:
         """Whether some node ``h`` maps is turned from its old node further than dead
