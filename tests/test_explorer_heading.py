@@ -103,13 +103,33 @@ def test_a_merge_that_zips_two_neighbours_turned_apart_is_refused():
     ex, c, d, x, y = _zipped_pair(90.0)
     assert ex._heading_fits(x, c, 0)
     assert ex.map.signature_rotations(y, d, 0.15, math.radians(25.0))  # alike but for heading
-    assert ex._zipped_turned({x: (c, 0)}, ex._likeness()) == (y, d)
+    misfit = ex._zipped_misfit({x: (c, 0)}, ex._likeness())
+    assert misfit == (y, d, "turned further than dead reckoning drifts")
+    assert ex._merge(Hypothesis({x: (c, 0)}, confirmed=2)) == {}
+    assert ex.notes[-1].text.startswith(f"merge refused: it makes node {y} one with node {d},")
+    assert sorted(n.id for n in ex.map.nodes()) == [c, d, x, y]
+    off = Explorer(NOMAD200_LIMITS, params=ExplorerParams(zip_turns=False))
+    off.map, off.born = ex.map, ex.born
+    assert off._zipped_misfit({x: (c, 0)}, off._likeness()) is None
     ex.map.connect(c, 1, x, 1, 40.0)  # the merge would make this edge come back by one port
-    assert ex._zipped_turned({x: (c, 0)}, ex._likeness()) is None  # the map refuses; not here
+    assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None  # the map refuses; not here
     ex, c, d, x, y = _zipped_pair(10.0)
-    assert ex._zipped_turned({x: (c, 0)}, ex._likeness()) is None
+    assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None
     ex, c, d, x, y = _zipped_pair(90.0)
     ex.born[y] = 300.0  # 100 deg allowed: read far apart, dead reckoning says little
-    assert ex._zipped_turned({x: (c, 0)}, ex._likeness()) is None
+    assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None
     del ex.born[y]  # read before a restart: no reading to compare
-    assert ex._zipped_turned({x: (c, 0)}, ex._likeness()) is None
+    assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None
+
+
+def test_a_merge_that_zips_two_places_further_apart_than_dead_reckoning_drifts_is_refused():
+    ex, c, d, x, y = _zipped_pair(10.0)
+    ex.fixes = {c: (0.0, 0.0, 0.0), d: (3.0, 0.0, 1.0), x: (0.5, 0.0, 50.0), y: (9.0, 0.0, 52.0)}
+    assert ex._drifted_apart(Hypothesis({x: (c, 0)})) is None  # the pair it names is near
+    # 1.5 + 0.15 x 51 = 9.15 m allowed
+    assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None
+    ex.fixes[y] = (13.0, 0.0, 52.0)
+    misfit = ex._zipped_misfit({x: (c, 0)}, ex._likeness())
+    assert misfit == (y, d, "10.0 m apart by dead reckoning after 51 m")
+    ex.p = ExplorerParams(zip_drift=False)
+    assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None

@@ -77,17 +77,20 @@ class HeadingBounds(ExplorerState):
         misfits = [x for x, (c, k) in sorted(h.mapping.items()) if not self._heading_fits(x, c, k)]
         return misfits or self._turned_apart(h)
 
-    def _zipped_turned(
+    def _zipped_misfit(
         self, mapping: Mapping[int, tuple[int, int]], alike: Likeness
-    ) -> tuple[int, int] | None:
-        """The first pair of meet points that merging ``mapping`` makes one beyond the pairs
-        it names (the merge zips along the edges they share) turned further from each
-        other than dead reckoning drifts between their readings; None if there is none, or
-        if the map refuses the merge (it says why when it is made). fig13 seed 8 at drift
-        paper (stop 62, with a sweep change not kept): a close pair's two readings, their
-        ports matched one edge round, made the edges to its north and east neighbours one
-        (4.05 m and 3.49 m, within the length's slack) and the neighbours one place, 5.2 m
-        apart and turned 93 degrees where 46 were allowed: a false merge."""
+    ) -> tuple[int, int, str] | None:
+        """The first pair of places that merging ``mapping`` makes one beyond the pairs it
+        names (the merge zips along the edges they share) that dead reckoning rules out:
+        meet points turned further from each other than it drifts between their readings
+        (``zip_turns``), or places it put further apart than it drifts over the metres
+        between the robot's last stands at them (``zip_drift``, ``_drifted_apart``). As
+        (node, node, why); None if there is none, or if the map refuses the merge (it says
+        why when the merge is made). fig13 seed 8 at drift paper (stop 62, with a sweep
+        change not kept): a close pair's two readings, their ports matched one edge round,
+        made the edges to its north and east neighbours one (4.05 m and 3.49 m, within the
+        length's slack) and the neighbours one place, 5.2 m apart and turned 93 degrees
+        where 46 were allowed: a false merge."""
         trial = self.map.copy()
         zipped: list[tuple[int, int, int]] = []
 
@@ -99,8 +102,11 @@ class HeadingBounds(ExplorerState):
         except MapError:
             return None
         for d, r, k in sorted(zipped):
-            if d in self.born and not self._heading_fits(d, r, k):
-                return d, r
+            if self.p.zip_turns and not self._heading_fits(d, r, k):
+                return d, r, "turned further than dead reckoning drifts"
+            far = self._drifted_apart(Hypothesis({d: (r, k)})) if self.p.zip_drift else None
+            if far is not None:
+                return d, r, f"{far[2]:.1f} m apart by dead reckoning after {far[3]:.0f} m"
         return None
 
     def _turned_well_beyond(self, h: Hypothesis) -> bool:

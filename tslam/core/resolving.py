@@ -535,11 +535,11 @@ class Resolving(MergeGrow):
         self._apply_grows(h)
         if any(self.map.has_edge(e) for e in h.cuts):
             self._remove_cuts(h)
-        turned = self._zipped_turned(h.mapping, self._likeness()) if self.p.zip_turns else None
-        if turned is not None:
+        misfit = self._zipped_misfit(h.mapping, self._likeness())
+        if misfit is not None:
             self._note(
-                f"merge refused: it makes node {turned[0]} one with node {turned[1]}, turned "
-                "further than dead reckoning drifts: keeping both"
+                f"merge refused: it makes node {misfit[0]} one with node {misfit[1]}, "
+                f"{misfit[2]}: keeping both"
             )
             self._abandon_hypotheses()
             return {}
