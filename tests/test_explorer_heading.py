@@ -98,7 +98,7 @@ def _zipped_pair(turn_deg: float) -> tuple[Explorer, int, int, int, int]:
 def test_a_merge_that_zips_two_neighbours_turned_apart_is_refused():
     """fig13 seed 8 at drift paper (stop 62, with a sweep change not kept): a close pair's two
     readings, their ports matched one edge round, zipped its north and east neighbours
-    into one place, 5.2 m apart and turned 93 degrees where 46 were allowed. The pair the
+    into one place, 5.2 m apart and turned 93 degrees where 34 were allowed. The pair the
     hypothesis names fits; the one the merge makes on the way must fit too."""
     ex, c, d, x, y = _zipped_pair(90.0)
     assert ex._heading_fits(x, c, 0)

@@ -90,7 +90,7 @@ class HeadingBounds(ExplorerState):
         change not kept): a close pair's two readings, their ports matched one edge round,
         made the edges to its north and east neighbours one (4.05 m and 3.49 m, within the
         length's slack) and the neighbours one place, 5.2 m apart and turned 93 degrees
-        where 46 were allowed: a false merge."""
+        where 34 were allowed: a false merge."""
         trial = self.map.copy()
         zipped: list[tuple[int, int, int]] = []
 
