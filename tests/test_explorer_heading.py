@@ -91,7 +91,7 @@ def _zipped_pair(turn_deg: float) -> tuple[Explorer, int, int, int, int]:
     y = ex.map.add_meet(1.3, [rad(a + turn_deg) for a in (0, 120, 240)], (3.0, 0.0))
     ex.map.connect(c, 0, d, 1, 3.0)
     ex.map.connect(x, 0, y, 1, 3.1)
-    ex.born = {c: 0.0, d: 1.0, x: 50.0, y: 52.0}  # 25 + 0.25 x 51 = 37.75 deg allowed
+    ex.born = {c: 0.0, d: 1.0, x: 50.0, y: 52.0}  # 25 + 0.25 x 51 = 37.75 deg, 25 more zipped
     return ex, c, d, x, y
 
 
@@ -116,7 +116,7 @@ def test_a_merge_that_zips_two_neighbours_turned_apart_is_refused():
     ex, c, d, x, y = _zipped_pair(10.0)
     assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None
     ex, c, d, x, y = _zipped_pair(90.0)
-    ex.born[y] = 300.0  # 100 deg allowed: read far apart, dead reckoning says little
+    ex.born[y] = 300.0  # 125 deg allowed: read far apart, dead reckoning says little
     assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None
     del ex.born[y]  # read before a restart: no reading to compare
     assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None

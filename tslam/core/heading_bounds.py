@@ -81,16 +81,21 @@ class HeadingBounds(ExplorerState):
         self, mapping: Mapping[int, tuple[int, int]], alike: Likeness
     ) -> tuple[int, int, str] | None:
         """The first pair of places that merging ``mapping`` makes one beyond the pairs it
-        names (the merge zips along the edges they share) that dead reckoning rules out:
-        meet points turned further from each other than it drifts between their readings
-        (``zip_turns``), or places it put further apart than it drifts over the metres
-        between the robot's last stands at them (``zip_drift``, ``_drifted_apart``). As
+        names (the merge zips along the edges they share) that dead reckoning rules out, as
         (node, node, why); None if there is none, or if the map refuses the merge (it says
-        why when the merge is made). fig13 seed 8 at drift paper (stop 62, with a sweep
-        change not kept): a close pair's two readings, their ports matched one edge round,
-        made the edges to its north and east neighbours one (4.05 m and 3.49 m, within the
-        length's slack) and the neighbours one place, 5.2 m apart and turned 93 degrees
-        where 34 were allowed: a false merge."""
+        why when the merge is made).
+
+        Ruled out: meet points turned from each other further than it drifts between their
+        readings, by ``heading_base_rad`` more (``zip_turns``), or places it put further
+        apart than it drifts over the metres between the robot's last stands at them
+        (``zip_drift``, ``_drifted_apart``). fig13 seed 8 at drift paper (stop 62, with a
+        sweep change not kept): a close pair's two readings, their ports matched one edge
+        round, made the edges to its north and east neighbours one (4.05 m and 3.49 m,
+        within the length's slack) and the neighbours one place, 5.2 m apart and turned 93
+        degrees where 34 were allowed: a false merge. A port matched one round turns a
+        neighbour by about a departure's spacing, but drift alone may pass the bound a
+        little: under drift ``severe`` the pairs of one true merge were turned 19 to 43
+        degrees where 41 were allowed (fig1 seed 14 at 1754 s), hence the margin."""
         trial = self.map.copy()
         zipped: list[tuple[int, int, int]] = []
 
@@ -102,7 +107,7 @@ class HeadingBounds(ExplorerState):
         except MapError:
             return None
         for d, r, k in sorted(zipped):
-            if self.p.zip_turns and not self._heading_fits(d, r, k):
+            if self.p.zip_turns and not self._heading_fits(d, r, k, self.p.heading_base_rad):
                 return d, r, "turned further than dead reckoning drifts"
             far = self._drifted_apart(Hypothesis({d: (r, k)})) if self.p.zip_drift else None
             if far is not None:
