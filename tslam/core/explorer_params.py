@@ -229,11 +229,11 @@ class ExplorerParams:
     # first hop was driven at 28 m and the others at 186-288 m, some 50 degrees apart in
     # heading error. Each hop needs turning by the heading drift its revisits measure first.
     drift_chain: bool = False
-    # The heading bound holds for every pair of meet points a merge makes one, not only
-    # those its hypothesis names: the merge zips along their shared edges, and a port
-    # matched one round zips two neighbours that dead reckoning's heading tells apart
-    # (``HeadingBounds._zipped_misfit``). Neither fired in stop 62's benches of main's code
-    # (every run the same); a false merge it refused is in ``_zipped_misfit``.
+    # The heading bound, with ``heading_base_rad`` to spare, holds for every pair of meet
+    # points a merge makes one, not only those its hypothesis names: the merge zips along
+    # their shared edges, and a port matched one round zips two neighbours that dead
+    # reckoning's heading tells apart (``HeadingBounds._zipped_misfit``, where the false
+    # merge it refused is). It never fired in stop 62's benches of the code before it.
     zip_turns: bool = True
     # ... and so does the drift bound above.
     zip_drift: bool = True

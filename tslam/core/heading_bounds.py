@@ -96,6 +96,8 @@ class HeadingBounds(ExplorerState):
         neighbour by about a departure's spacing, but drift alone may pass the bound a
         little: under drift ``severe`` the pairs of one true merge were turned 19 to 43
         degrees where 41 were allowed (fig1 seed 14 at 1754 s), hence the margin."""
+        if not (self.p.zip_turns or self.p.zip_drift):
+            return None
         trial = self.map.copy()
         zipped: list[tuple[int, int, int]] = []
 
