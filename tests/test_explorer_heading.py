@@ -115,6 +115,9 @@ def test_a_merge_that_zips_two_neighbours_turned_apart_is_refused():
     assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None  # the map refuses; not here
     ex, c, d, x, y = _zipped_pair(10.0)
     assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None
+    ex, c, d, x, y = _zipped_pair(50.0)  # past the bound, within the margin: drift may do that
+    assert not ex._heading_fits(y, d, 0)
+    assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None
     ex, c, d, x, y = _zipped_pair(90.0)
     ex.born[y] = 300.0  # 125 deg allowed: read far apart, dead reckoning says little
     assert ex._zipped_misfit({x: (c, 0)}, ex._likeness()) is None
