@@ -52,7 +52,16 @@ class MergeGrow(ExplorerState):
             return None
         bx, by = self.born.get(x), self.born.get(y)
         bound = math.pi if bx is None or by is None else self._heading_drift(abs(bx - by))
-        read = ports_in_place(low.departures_rad, px, high.departures_rad, py, tol.angle_rad, bound)
+        read = ports_in_place(
+            low.departures_rad,
+            px,
+            high.departures_rad,
+            py,
+            tol.angle_rad,
+            bound,
+            view.signature(x).to_boundary,
+            view.signature(y).to_boundary,
+        )
         if read is None:
             return None
         turn, to = read
@@ -93,6 +102,8 @@ def ports_in_place(
     py: int,
     tol_rad: float,
     bound_rad: float,
+    low_ends: tuple[bool | None, ...] = (),
+    high_ends: tuple[bool | None, ...] = (),
 ) -> tuple[float, dict[int, int]] | None:
     """How a reading ``low`` of a place, one departure short of the reading ``high``, lies
     in it, port ``px`` being port ``py``: (the turn from ``low`` to ``high``, low port ->
@@ -101,7 +112,14 @@ def ports_in_place(
     within ``bound_rad``, but that one of ``low``'s may be two of ``high``'s read as one,
     lying between the one it goes to and the one left out, beside it (the 0.29 m pair by
     fig14's east table: its south and east edges read as one, between the two). The fit
-    with every port agreeing wins, then the one that agrees best."""
+    with every port agreeing wins, then the one that agrees best.
+
+    ``low_ends``, ``high_ends``: per port, whether its edge leads to a boundary point (None
+    if untraced, as ``Signature.to_boundary``). A port goes to no port whose edge leads to
+    the other kind of node. Angles alone may pick the wrong one of the two edges read as
+    one: at fig14's junction by the lab's east wall (seed 5 at drift paper), a reading of 31
+    degrees, the edge east to a meet point, was nearer the dead end at 61 than the meet
+    point at 7, and the merge then found the place read twice "looks otherwise"."""
     dl, dh = len(low), len(high)
     if dh != dl + 1 or not (0 <= px < dl and 0 <= py < dh):
         return None
@@ -111,6 +129,11 @@ def ports_in_place(
             continue
         rest = [i for i in ((py + s) % dh for s in range(dh)) if i != out]
         to = {(px + s) % dl: rest[s] for s in range(dl)}
+        if low_ends and high_ends and any(
+            low_ends[p] is not None and high_ends[i] is not None and low_ends[p] != high_ends[i]
+            for p, i in to.items()
+        ):
+            continue
         beside = [p for p, i in to.items() if (i - out) % dh in (1, dh - 1)]
         for merged in (None, *beside):
             diffs = [high[to[p]] - low[p] for p in to if p != merged]
