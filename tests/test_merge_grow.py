@@ -55,6 +55,27 @@ def test_a_reading_of_another_shape_does_not_fit():
     assert ports_in_place(_rad([90, 180, 225]), 2, _rad(CROSS), 0, TOL, 0.1) is None
 
 
+
+def test_two_edges_read_as_one_go_to_the_edge_that_leads_to_the_same_kind_of_node():
+    # fig14 seed 5 at drift paper: the place read with three edges, its port 0 (31 degrees)
+    # traced to a meet point; read with four, port 1 (61) traced to a dead end and port 0
+    # (7) untraced. By angle alone 31 is nearer 61.
+    low, high = _rad([30.8, 156.8, 284.8]), _rad([6.7, 60.6, 165.8, 291.8])
+    bound = math.radians(60.0)
+    assert ports_in_place(low, 2, high, 3, TOL, bound)[1][0] == 1
+    ends_low, ends_high = (False, None, False), (None, True, False, False)
+    turn, to = ports_in_place(low, 2, high, 3, TOL, bound, ends_low, ends_high)
+    assert to == {0: 0, 1: 2, 2: 3}
+    assert abs(math.degrees(turn)) < 10.0
+    # Only the kinds of traced edges count: untraced on either side, anything goes.
+    assert ports_in_place(low, 2, high, 3, TOL, bound, (None,) * 3, ends_high)[1][0] == 1
+
+
+def test_no_port_fits_when_every_edge_leads_to_the_other_kind():
+    low, high = _rad([30.8, 156.8, 284.8]), _rad([6.7, 60.6, 165.8, 291.8])
+    ends_low, ends_high = (False, None, False), (True, True, False, False)
+    assert ports_in_place(low, 2, high, 3, TOL, math.radians(60.0), ends_low, ends_high) is None
+
 def _copy_of_a_and_its_place(ex: Explorer) -> tuple[int, int, int, int, int, Hypothesis]:
     """A - 2 m east - P, the place read with three edges; X - 2 m east - Q, the same two
     mapped again by a robot that lost its way, Q read with four and a dead end south of it.
