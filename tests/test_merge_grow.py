@@ -127,6 +127,30 @@ def test_a_node_another_hypothesis_names_is_not_read_again():
     assert ex.map.node(p).degree == 3 and ex.map.has_node(q)
 
 
+
+def test_a_node_named_only_by_a_rival_the_merge_drops_is_read_again():
+    # The rival places X elsewhere too: the merge of X = A drops it (fig14 seed 14 at drift
+    # paper: such a rival refused a merge proven seven times over).
+    ex = Explorer(NOMAD200_LIMITS)
+    _, p, x, q, _, h = _copy_of_a_and_its_place(ex)
+    other = ex.map.add_meet(1.0, _rad(A_DEPS), (40.0, 0.0))
+    look = ex.map.add_meet(1.5, _rad(MERGED), (42.0, 0.0))
+    ex.hyps.live.append(Hypothesis({x: (other, 0), look: (p, 0)}))
+    assert ex._merge(h)
+    assert ex.map.node(p).degree == 4 and not ex.map.has_node(q)
+    assert ex.hyps.live == []
+
+
+def test_a_node_named_by_a_rival_the_merge_keeps_open_is_not_read_again():
+    ex = Explorer(NOMAD200_LIMITS)
+    _, p, x, q, _, h = _copy_of_a_and_its_place(ex)
+    other = ex.map.add_meet(1.0, _rad(A_DEPS), (40.0, 0.0))
+    look = ex.map.add_meet(1.5, _rad(MERGED), (42.0, 0.0))
+    rival = Hypothesis({x: (other, 0), look: (p, 0)})
+    ex.hyps.live.append(rival)
+    assert ex._merge(h, keep=[rival]) == {}
+    assert ex.map.node(p).degree == 3 and ex.map.has_node(q)
+
 def test_a_reading_that_does_not_lie_in_the_place_is_not_read_again():
     ex = Explorer(NOMAD200_LIMITS)
     _, p, _, q, _, h = _copy_of_a_and_its_place(ex)

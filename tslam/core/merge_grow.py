@@ -20,6 +20,7 @@ ports are what the hypothesis's rotation refers to; nor a stored map's.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 from tslam.core.explorer_state import ExplorerState, angdiff
 from tslam.core.frames import TAU
@@ -36,16 +37,22 @@ class MergeGrow(ExplorerState):
     """Reading a node with an edge fewer as its place, for a merge that needs it."""
 
     def _grow(
-        self, view: TopoMap, ends: tuple[tuple[int, int], tuple[int, int]]
+        self,
+        view: TopoMap,
+        ends: tuple[tuple[int, int], tuple[int, int]],
+        h: Hypothesis | None = None,
+        keep: Sequence[Hypothesis] = (),
     ) -> tuple[int, tuple[float, ...], float, dict[int, int]] | None:
         """The node of ``ends`` with fewer edges read as the other reads the place: (node,
         departures, clearance, carry); None if it does not read so. ``ends``: the (node,
-        port) each is reached by through the edge the merge makes one."""
+        port) each is reached by through the edge the merge makes one; ``h``: the hypothesis
+        merged, ``keep``: those its merge keeps open (``_outlives``)."""
         (x, px), (y, py) = ends
         if view.node(x).degree > view.node(y).degree:
             (x, px), (y, py) = (y, py), (x, px)
         low, high = view.node(x), view.node(y)
-        if x in self.stored or low.ambiguous_with or self._in_hypotheses(x):
+        named = self._in_hypotheses(x) if h is None else self._outlives(x, h, keep)
+        if x in self.stored or low.ambiguous_with or named:
             return None
         tol = self._tol()
         if not self._one_place_clearances(low.clearance_m, high.clearance_m, tol):
@@ -71,6 +78,23 @@ class MergeGrow(ExplorerState):
         at = {i: order.index(i) for i in range(high.degree)}
         carry = {p: at[to[p]] for p in range(low.degree)}
         return x, tuple(turned[i] for i in order), low.clearance_m, carry
+
+    def _outlives(self, x: int, h: Hypothesis, keep: Sequence[Hypothesis]) -> bool:
+        """Whether ``h`` or a hypothesis that may outlive its merge names ``x``: its rotation
+        refers to ``x``'s ports. The merge drops every other live hypothesis that shares a
+        node with ``h`` (``Resolving._merge``, ``_apart_from``), so one of those naming
+        ``x`` does not keep it from being read again: in fig14 seed 14 at drift paper, a
+        rival naming the junction by the lab's east wall, read there with an edge fewer,
+        refused a merge proven seven times over, and its fragment of 16 nodes stayed copies.
+        """
+        mine = set(h.mapping) | {c for c, _ in h.mapping.values()}
+        for o in self.hyps.live:
+            names = set(o.mapping) | {c for c, _ in o.mapping.values()}
+            if x not in names:
+                continue
+            if o is h or any(o is k for k in keep) or not names & mine:
+                return True
+        return x in mine
 
     def _apply_grows(self, h: Hypothesis) -> None:
         """Read the nodes ``h``'s merge needed read again (``Hypothesis.grows``) so."""

@@ -472,7 +472,7 @@ class Resolving(MergeGrow):
             view.remove_edge(e)
         return view
 
-    def _cut_conflicts(self, h: Hypothesis) -> TopoMap | None:
+    def _cut_conflicts(self, h: Hypothesis, keep: Sequence[Hypothesis] = ()) -> TopoMap | None:
         """The map ``h`` merges into: without the edges it says went past a junction and,
         with ``cut_past``, without any edge its merge would make one with a shorter edge
         between two meet points (the first tracing went past one: fig13's meet point 0,
@@ -496,7 +496,7 @@ class Resolving(MergeGrow):
             except DegreeConflictError as exc:
                 grow = None
                 if self.p.merge_grows and len(h.grows) < MAX_GROWS:
-                    grow = self._grow(view, exc.ends)
+                    grow = self._grow(view, exc.ends, h, keep)
                 if grow is None or grow[0] in h.grows:
                     self._note(f"merge refused by the map ({exc}): keeping both")
                     return None
@@ -519,7 +519,7 @@ class Resolving(MergeGrow):
 
     def _merge(self, h: Hypothesis, keep: Sequence[Hypothesis] = ()) -> dict[int, tuple[int, int]]:
         """Merge ``h``; ``keep``: hypotheses the merge does not settle, kept open."""
-        view = self._cut_conflicts(h)
+        view = self._cut_conflicts(h, keep)
         if view is None:
             self._abandon_hypotheses()
             return {}
