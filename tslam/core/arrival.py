@@ -359,6 +359,12 @@ class Arrival(ExplorerState):
             return w, k
         if bearings is not None:
             return w, self._by_bearings(ev, f, w, *bearings)
+        askew = self._read_askew(ev, w, q, length, edge.length_m, slack)
+        if askew is not None:
+            if length is not None and not self.disturbed:
+                self.map.add_measurement(e, length)
+            self.partial_m = 0.0
+            return w, askew
         # Dead reckoning that puts the robot elsewhere than where it left for the dead end
         # vetoes an arrival read askew (a twin junction, as above).
         pm = self._read_otherwise(

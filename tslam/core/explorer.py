@@ -49,6 +49,7 @@ import networkx as nx
 
 from hal.types import DriveStatus, Odometry, SonarScan, Twist
 from tslam.core.arrival import Arrival
+from tslam.core.askew import Askew
 from tslam.core.boundaries import Boundaries
 from tslam.core.explorer_params import ExplorerParams
 from tslam.core.heading_bounds import HeadingBounds
@@ -76,6 +77,7 @@ class Mode(enum.Enum):
 
 class Explorer(
     Arrival,
+    Askew,
     PredictedPlace,
     PlacePair,
     PlaceLeadIns,

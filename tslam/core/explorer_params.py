@@ -19,6 +19,9 @@ class ExplorerParams:
     # arrival edge read this far off the mapped port, the reading turned as a whole (a close
     # pair come at from its other point: portmap._match_turned; 0: the arrival anchors).
     pair_turn_rad: float = math.radians(45.0)
+    # ... and one read with as many edges, every departure where the map has it but the way
+    # in, is its node, that port read askew when mapped (askew.py; False: lost there).
+    askew_arrival: bool = True
     # ... and read with an edge more, the node becomes the place read, the edge more
     # unexplored (False: the reading's edge more is left out).
     grow_place: bool = True
