@@ -533,20 +533,6 @@ class Tracer:
             return Twist(0.0, 0.0, p.sweep_radps)
         return laws.homing_velocity(target, p.home_gain, p.home_max_mps)
 
-    def _open_sided(self, obs: list[Obstacle]) -> bool:
-        """Whether the obstacles equidistant to where the robot stands, three or more, leave
-        a side open wider than ``sweep_open_rad`` (tracer_params)."""
-        p = self.p
-        if p.sweep_open_rad <= 0.0 or not obs:
-            return False
-        near = sorted(
-            o.bearing_rad % TAU for o in obs if o.distance_m - obs[0].distance_m <= p.degree_tol_m
-        )
-        if len(near) < 3:
-            return False
-        gaps = [(b - a) % TAU for a, b in zip(near, [*near[1:], near[0] + TAU], strict=True)]
-        return max(gaps) > p.sweep_open_rad
-
     def _keeps(self, held: tuple[float, float], odo: Odometry, now: float) -> bool:
         """Whether homing keeps to ``held``: it was this close, and seen a moment ago."""
         p = self.p
@@ -585,7 +571,7 @@ class Tracer:
             agree=p.sweep_view_agree,
             silent_view=p.sweep_silent_view,
         )
-        if (doubts or self._open_sided(obs)) and p.sweep_again and not s.swept_again:
+        if doubts and p.sweep_again and not s.swept_again:
             # One deeper reading between two walls: a stray echo, or a doorway too narrow
             # for the sweep's spacing. Another turn of the turret puts readings between.
             s.swept_again = True

@@ -37,12 +37,6 @@ class TracerParams:
     # and every obstacle answers over four or five samples (see sweep.py).
     sweep_s: float = 3.9
     sweep_again: bool = True  # a doubtful sweep turns the turret once more (sweep.py)
-    # ... and so does one whose obstacles equidistant to the point leave a side open this
-    # wide: the centre of a circle touching them all could move away from them, so the
-    # sweep missed one. A convex corner's weak echo went unheard at fig14's junction by the
-    # lab's east wall, and the junction's south edge was read at the bisector of the gap,
-    # 74 degrees off (seed 3 at drift paper). 0: off.
-    sweep_open_rad: float = math.radians(200.0)
     sweep_radps: float = math.radians(22.5) / 3.9
     home_gain: float = 1.0
     # Homing this close to its point keeps to it when the ring's estimate jumps more than
