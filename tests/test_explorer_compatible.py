@@ -38,22 +38,25 @@ def _map(params: ExplorerParams | None = None) -> tuple[Explorer, dict[str, int]
     return ex, n
 
 
-def test_a_rival_about_other_nodes_is_kept_open_and_the_proven_one_merged():
-    ex, n = _map()
+def _resolve_beside(
+    rival: str, confirmed: int = 1, params: ExplorerParams | None = None
+) -> tuple[Explorer, dict[str, int]]:
+    """X = A, Y = B proven four times over, beside a rival placing ``rival`` on C."""
+    ex, n = _map(params)
     h = Hypothesis({n["x"]: (n["a"], 0), n["y"]: (n["b"], 0)}, confirmed=4)
-    o = Hypothesis({n["z"]: (n["c"], 0)}, confirmed=1)
-    ex.hyps.live = [h, o]
+    ex.hyps.live = [h, Hypothesis({n[rival]: (n["c"], 0)}, confirmed=confirmed)]
     ex._resolve(n["z"])
+    return ex, n
+
+
+def test_a_rival_about_other_nodes_is_kept_open_and_the_proven_one_merged():
+    ex, n = _resolve_beside("z")
     assert not ex.map.has_node(n["x"]) and not ex.map.has_node(n["y"])
     assert [x.mapping for x in ex.hyps.live] == [{n["z"]: (n["c"], 0)}]
 
 
 def test_a_rival_that_places_a_node_elsewhere_holds_the_merge_up():
-    ex, n = _map()
-    h = Hypothesis({n["x"]: (n["a"], 0), n["y"]: (n["b"], 0)}, confirmed=4)
-    o = Hypothesis({n["y"]: (n["c"], 0)}, confirmed=1)
-    ex.hyps.live = [h, o]
-    ex._resolve(n["z"])
+    ex, n = _resolve_beside("y")
     assert ex.map.has_node(n["x"]) and ex.map.has_node(n["y"])
 
 
@@ -70,18 +73,10 @@ def test_a_lap_onto_the_fragment_leaves_its_nodes_to_the_rival():
 
 
 def test_without_the_rule_a_rival_about_other_nodes_holds_the_merge_up():
-    ex, n = _map(ExplorerParams(merge_compatible=False))
-    h = Hypothesis({n["x"]: (n["a"], 0), n["y"]: (n["b"], 0)}, confirmed=4)
-    o = Hypothesis({n["z"]: (n["c"], 0)}, confirmed=1)
-    ex.hyps.live = [h, o]
-    ex._resolve(n["z"])
+    ex, n = _resolve_beside("z", params=ExplorerParams(merge_compatible=False))
     assert ex.map.has_node(n["x"]) and ex.map.has_node(n["y"])
 
 
 def test_a_rival_with_as_much_support_holds_the_merge_up():
-    ex, n = _map()
-    h = Hypothesis({n["x"]: (n["a"], 0), n["y"]: (n["b"], 0)}, confirmed=4)
-    o = Hypothesis({n["z"]: (n["c"], 0)}, confirmed=4)
-    ex.hyps.live = [h, o]
-    ex._resolve(n["z"])
+    ex, n = _resolve_beside("z", confirmed=4)
     assert ex.map.has_node(n["x"]) and ex.map.has_node(n["y"])
