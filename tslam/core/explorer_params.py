@@ -19,9 +19,6 @@ class ExplorerParams:
     # arrival edge read this far off the mapped port, the reading turned as a whole (a close
     # pair come at from its other point: portmap._match_turned; 0: the arrival anchors).
     pair_turn_rad: float = math.radians(45.0)
-    # ... and one read with as many edges, every departure where the map has it but the way
-    # in, is its node, that port read askew when mapped (askew.py; False: lost there).
-    askew_arrival: bool = True
     # ... and read with an edge more, the node becomes the place read, the edge more
     # unexplored (False: the reading's edge more is left out).
     grow_place: bool = True
@@ -31,6 +28,10 @@ class ExplorerParams:
     # two nodes, the first then read with four edges and grown; arriving by its true three,
     # the robot mapped it again). 0: off.
     grow_beside_m: float = 0.8
+    # At the end of a known edge, a junction read with as many edges as its node, every
+    # departure but the way in where the map has it, is that node, its way in read askew
+    # when mapped (askew.py; False: the robot is lost there).
+    askew_arrival: bool = True
     # Past the node expected, a node one edge further is recognised by signature and length
     # only if no unexplored departure of the node passed could have led on instead (False:
     # whatever the unexplored departures).
