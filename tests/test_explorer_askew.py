@@ -61,6 +61,19 @@ def test_a_second_departure_off_is_another_place():
     assert ex.map.node(w).departures_rad == _rad(W_MAPPED)
 
 
+def test_a_junction_of_three_edges_is_not_recognised_so():
+    # Its two other departures agree on one angle only: too little to place it.
+    ex = Explorer(NOMAD200_LIMITS)
+    w = ex.map.add_meet(1.44, _rad([2, 120, 213]), (0.0, 0.0))
+    s = ex.map.add_meet(1.22, _rad(SOUTH), (0.0, -4.3))
+    ex.map.connect(s, 0, w, 2, 4.33)
+    ex.leaving = (s, 0)
+    deps = _rad([3, 121, 285])
+    rel = tuple((x - deps[2]) % (2 * math.pi) for x in deps)
+    node, _ = ex._arrive(MeetPointReached(0.0, 0.1, 0.0, 1.41, 3, deps, 2, rel, 4.30))
+    assert node != w and ex.map.node(w).departures_rad == _rad([2, 120, 213])
+
+
 def test_another_length_is_another_place():
     ex, w, _ = _leaving_south()
     assert _arrive(ex, W_READ, length=6.0) != w

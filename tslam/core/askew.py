@@ -12,7 +12,10 @@ together was refused ("looks otherwise"), and their fragment stayed copies.
 The edge's length, the clearance and every other departure, under a turn no larger than
 dead reckoning's heading drift since the node was read, say where the robot is; the
 arrival port's angle is then read again from this arrival, which the robot has just traced
-in by.
+in by. Only at a junction of four edges or more: with three, the two departures left agree
+on one angle only, and in a walk of fig13's graph (tests/test_explorer_past.py) a junction
+was so recognised at the end of another edge as long, its port turned 67 degrees, and the
+map went wrong from there.
 """
 
 from __future__ import annotations
@@ -47,7 +50,7 @@ class Askew(ExplorerState):
             or length is None
             or wn.kind != "meet"
             or wn.degree != ev.degree
-            or wn.degree < 3
+            or wn.degree < 4
             or w in self.stored
             or not tol.length_ok(length, mapped)
             or abs(ev.clearance_m - wn.clearance_m) > tol.clearance_m
