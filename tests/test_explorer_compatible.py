@@ -72,6 +72,16 @@ def test_a_lap_onto_the_fragment_leaves_its_nodes_to_the_rival():
     assert ex._compatible(lap, h)
 
 
+def test_a_lap_that_ends_on_an_old_node_is_followed_there():
+    # h closes y onto z and places z on C: in the end y is C. A rival with y on A says
+    # otherwise; one with y on C agrees.
+    ex, n = _map()
+    h = Hypothesis({n["y"]: (n["z"], 0), n["z"]: (n["c"], 0)}, confirmed=4)
+    assert not ex._compatible(h, Hypothesis({n["y"]: (n["a"], 0)}, confirmed=1))
+    assert ex._compatible(h, Hypothesis({n["y"]: (n["c"], 0)}, confirmed=1))
+    assert ex._compatible(h, Hypothesis({n["x"]: (n["a"], 0)}, confirmed=1))
+
+
 def test_without_the_rule_a_rival_about_other_nodes_holds_the_merge_up():
     ex, n = _resolve_beside("z", params=ExplorerParams(merge_compatible=False))
     assert ex.map.has_node(n["x"]) and ex.map.has_node(n["y"])

@@ -224,7 +224,17 @@ class Resolving(MergeGrow):
         after ``h``'s merge ``o`` is about the nodes that are left."""
         for x, image in o.mapping.items():
             mine = h.mapping.get(x)
-            if mine is None or mine == image or mine[0] in self.hyps.fragment:
+            # Through the nodes of the fragment ``h`` closes onto and places in turn: to
+            # where ``h`` puts ``x`` in the end.
+            seen = {x}
+            while mine is not None and mine[0] in h.mapping and mine[0] not in seen:
+                seen.add(mine[0])
+                mine = h.mapping[mine[0]]
+            if mine is None or mine == image:
+                continue
+            if len(seen) > 1 and mine[0] == image[0]:
+                continue  # the same place, its ports turned through a lap: the map judges
+            if mine[0] in self.hyps.fragment and mine[0] not in h.mapping:
                 continue
             return False
         return True
