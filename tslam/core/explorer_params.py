@@ -279,9 +279,9 @@ class ExplorerParams:
     # (``Explorer._fold_implied``).
     fold_implied: bool = True
     # ... nor does one that says nothing against it: every node it places, the proven one
-    # leaves unplaced, agrees on, or closes onto another node of the fragment (a lap onto an
-    # earlier lap). The proven one is merged and such rivals stay open, renamed
-    # (``Resolving._compatible``).
+    # leaves unplaced, agrees on, or closes onto another node of the fragment that it does
+    # not place in turn (a lap onto an earlier lap). The proven one is merged and such
+    # rivals stay open, renamed (``Resolving._compatible``).
     merge_compatible: bool = True
     # A hypothesis's crowd counts every old node that looks like the new one, even those whose
     # departure the robot came by is already explored (``Explorer._crowd``).

@@ -244,10 +244,7 @@ class ExplorerState:
     def _in_hypotheses(self, node: int) -> bool:
         """Whether a live hypothesis places ``node`` or places a node on it: its ports are
         then what the hypothesis's rotation refers to."""
-        return any(
-            node in h.mapping or any(c == node for c, _ in h.mapping.values())
-            for h in self.hyps.live
-        )
+        return any(node in h.named for h in self.hyps.live)
 
     def _reread_node(
         self, node: int, departures_rad: Sequence[float], clearance_m: float, carry: dict[int, int]

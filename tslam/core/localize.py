@@ -86,6 +86,11 @@ class Hypothesis:
     grows: dict[int, tuple[tuple[float, ...], float, dict[int, int]]] = field(default_factory=dict)
 
     @property
+    def named(self) -> set[int]:
+        """The nodes it places and the nodes it places them on."""
+        return set(self.mapping) | {c for c, _ in self.mapping.values()}
+
+    @property
     def tested(self) -> bool:
         return self.confirmed + self.dead_ends > 0
 

@@ -87,9 +87,9 @@ class MergeGrow(ExplorerState):
         rival naming the junction by the lab's east wall, read there with an edge fewer,
         refused a merge proven seven times over, and its fragment of 16 nodes stayed copies.
         """
-        mine = set(h.mapping) | {c for c, _ in h.mapping.values()}
+        mine = h.named
         for o in self.hyps.live:
-            names = set(o.mapping) | {c for c, _ in o.mapping.values()}
+            names = o.named
             if x not in names:
                 continue
             if o is h or any(o is k for k in keep) or not names & mine:

@@ -439,7 +439,7 @@ class Resolving(MergeGrow):
         own = nx.node_connected_component(self.map.graph, here)
         if any(None in self.map.node(n).ports for n in own):
             return
-        named = {n for h in self.hyps.live for x, (c, _) in h.mapping.items() for n in (x, c)}
+        named = set().union(*(h.named for h in self.hyps.live))
         for comp in sorted(nx.connected_components(self.map.graph), key=min):
             if comp & (own | named | self.stored):
                 continue  # a stored map is an earlier run's: kept, whatever it duplicates
@@ -623,14 +623,14 @@ class Resolving(MergeGrow):
         evidence would go and their nodes stay copies for good. (Made for a case that turned
         out to be an ageing one, ``Explorer._test_path``; kept as the sound thing to do, and
         not measured on its own.)"""
-        mine = set(h.mapping) | {c for c, _ in h.mapping.values()}
+        mine = h.named
         return [
             o
             for o in self.hyps.live
             if o is not h
             and o.tested
             and all(o is not k for k in keep)
-            and not (set(o.mapping) | {c for c, _ in o.mapping.values()}) & mine
+            and not o.named & mine
         ]
 
     def _remove_cuts(self, h: Hypothesis) -> None:
@@ -647,7 +647,7 @@ class Resolving(MergeGrow):
             self.edge_gap.pop(e, None)
         self._note(f"edge(s) {', '.join(map(str, cuts))} went past a junction: removed")
         busy = {self.here, self.goal, None if self.leaving is None else self.leaving[0]}
-        busy |= set(h.mapping) | {c for c, _ in h.mapping.values()}
+        busy |= h.named
         for n in sorted(ends - busy):
             if self.map.has_node(n) and all(e is None for e in self.map.node(n).ports):
                 self.map.remove_node(n)
