@@ -145,3 +145,47 @@ def test_fig16_seed_7_touches_the_indent_once():
     touch = replace(STOP41, pinch_touch_rad=math.radians(80.0))
     run = explore("fig16", 7, "paper", duration_s=150.0, progress=False, tracer_params=touch)
     assert run.backend.robot.collisions == 0
+
+
+def _touch(tracer: Tracer, odo: Odometry, now: float) -> float:
+    """Touch something at ``odo``, then wait out the backoff standing; the time after."""
+    tracer.step(silent_scan(now), odo, PRESSED, now)
+    while tracer.s.behaviour is Behaviour.BACKOFF:
+        now += 0.1
+        tracer.step(silent_scan(now), odo, CLEAR, now)
+        assert now < 1000.0
+    return now + 0.1
+
+
+def test_a_contact_repeated_in_one_place_is_kept_without_contact_hold():
+    """fig1 seed 10: re-accessing away from the wall behind it, the robot drove back into a
+    wall's end the ring did not hear, 157 times. The third touch within ``repeat_contact_m``
+    is kept as an obstacle for ``repeat_hold_s``; touches elsewhere or long ago are not."""
+    params = TracerParams(contact_hold_s=0.0)
+    odo = Odometry(1.0, 2.0, math.pi / 2, 0.0, 0.0)
+    tracer = Tracer(NOMAD200_LIMITS, params)
+    now = _touch(tracer, odo, 0.0)
+    now = _touch(tracer, odo, now)
+    assert tracer.s.contacts == []  # twice is not yet a loop
+    now = _touch(tracer, odo, now)
+    assert len(tracer.s.contacts) == 1
+    tracer.step(silent_scan(now), odo, CLEAR, now)
+    assert [round(o.distance_m, 2) for o in tracer.obstacles] == [0.25]  # ahead: none heard
+    later = now + params.repeat_hold_s + 1.0
+    tracer.step(silent_scan(later), odo, CLEAR, later)
+    assert tracer.obstacles == []
+    apart = Tracer(NOMAD200_LIMITS, params)
+    t = 0.0
+    for k in range(3):
+        t = _touch(apart, Odometry(1.0 + 0.5 * k, 2.0, math.pi / 2, 0.0, 0.0), t)
+    assert apart.s.contacts == []
+    slow = Tracer(NOMAD200_LIMITS, params)
+    t = 0.0
+    for _ in range(3):
+        t = _touch(slow, odo, t) + params.repeat_window_s
+    assert slow.s.contacts == []
+    never = Tracer(NOMAD200_LIMITS, replace(params, repeat_contacts=0))
+    t = 0.0
+    for _ in range(4):
+        t = _touch(never, odo, t)
+    assert never.s.contacts == []

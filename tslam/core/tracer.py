@@ -79,8 +79,9 @@ class Tracer:
         self._scan = scan
         events: list[Event] = []
         if (status.bumper or status.stall) and self.s.behaviour is not Behaviour.BACKOFF:
-            if self.p.contact_hold_s > 0.0:
-                self.s.contacts.append((*self._contact_point(scan, odo), now_s))
+            hold = self._contact_hold(odo, now_s)
+            if hold > 0.0:
+                self.s.contacts.append((*self._contact_point(scan, odo), now_s + hold))
             # Touching something means the laws were fed a lie: what the robot touches is
             # inside the sonar's minimum range, invisible to the ring. Back away the way it
             # came (the base drove into it), then re-access.
@@ -137,10 +138,23 @@ class Tracer:
             px, py = self.p.contact_ahead_m * math.cos(way), 0.0
         return offset(to_odom((px, py), odo), odo)
 
+    def _contact_hold(self, odo: Odometry, now: float) -> float:
+        """How long to keep the contact just made: ``contact_hold_s``, or ``repeat_hold_s``
+        if it is the ``repeat_contacts``-th within ``repeat_contact_m`` of here lately."""
+        s, p = self.s, self.p
+        s.bumps = [b for b in s.bumps if now - b[2] <= p.repeat_window_s]
+        s.bumps.append((odo.x_m, odo.y_m, now))
+        here = [
+            b for b in s.bumps if math.hypot(b[0] - odo.x_m, b[1] - odo.y_m) <= p.repeat_contact_m
+        ]
+        if p.repeat_contacts > 0 and len(here) >= p.repeat_contacts:
+            return max(p.contact_hold_s, p.repeat_hold_s)
+        return p.contact_hold_s
+
     def _with_contacts(self, obs: list[Obstacle], odo: Odometry, now: float) -> list[Obstacle]:
-        """``obs`` and the contacts of the last ``contact_hold_s``, nearest first."""
+        """``obs`` and the contacts still kept, nearest first."""
         s = self.s
-        s.contacts = [c for c in s.contacts if now - c[2] <= self.p.contact_hold_s]
+        s.contacts = [c for c in s.contacts if now <= c[2]]
         if not s.contacts:
             return obs
         out = list(obs)

@@ -286,5 +286,14 @@ class TracerParams:
     # way the base was driving (0: not kept).
     contact_hold_s: float = 0.0
     contact_ahead_m: float = 0.25
+    # ... but a contact where the base touched ``repeat_contacts`` - 1 times already within
+    # ``repeat_window_s`` is kept for ``repeat_hold_s`` whatever ``contact_hold_s`` says (0
+    # contacts: never). Re-accessing away from the wall behind it, fig1's robot (seed 10 at
+    # drift paper, with a sweep change not kept, stop 64) drove back into a wall's end it
+    # did not hear 157 times over 850 s.
+    repeat_contacts: int = 3
+    repeat_contact_m: float = 0.4
+    repeat_window_s: float = 120.0
+    repeat_hold_s: float = 60.0
     backoff_m: float = 0.25  # reverse this far from a contact before re-accessing ...
     backoff_mps: float = 0.1  # ... at this speed, for at most four times as long as it takes

@@ -80,7 +80,8 @@ class TracerState:
     # Which way the base last translated: a contact that stops the robot zeroes the command,
     # and the way out is away from where it was going, not always backwards.
     last_v_sign: float = 1.0
-    contacts: list[tuple[float, float, float]] = field(default_factory=list)  # x, y, when
+    contacts: list[tuple[float, float, float]] = field(default_factory=list)  # x, y, until
+    bumps: list[tuple[float, float, float]] = field(default_factory=list)  # x, y, when
     # A room's door junction reached by access (``room_entry_m``), or the length of an edge
     # to a junction the ring does not show (``stop_at``) traced: the two obstacles there and
     # the bearing back to the door, to report next cycle.
