@@ -111,6 +111,33 @@ def test_homed_further_short_it_is_no_point_of_the_place():
     assert node != c
 
 
+def test_homed_a_little_short_of_a_place_with_an_edge_more_grows_it():
+    """fig16 seed 13 without drift: the place mapped at the corridor's point with three
+    edges (the indent's two as one); back from the indent's dead end the robot homed at the
+    weak meet point 0.36 m short, with the place's four edges. Passed through as a weak meet
+    point, the indent's other dead end was never explored and the run finished with the map
+    one edge short. Now the node grows the edge it lacks, to explore."""
+    three = [90, 197, 270]
+
+    def back(params: ExplorerParams | None = None) -> tuple[Explorer, int]:
+        ex = Explorer(NOMAD200_LIMITS, params=params)
+        c = _add(ex, 1.15, three, 0.0)
+        b = ex.map.add_boundary(0.44, (-0.8, -0.3))
+        ex.map.connect(c, three.index(197), b, 0, 0.86)
+        ex.leaving = (b, 0)
+        ex._arrive(meet(-0.37, 0.0, AT_WEAK, 203, 0.50, 0.89))
+        return ex, c
+
+    ex, c = back()
+    assert ex.map.node(c).degree == 4 and ex.map.node(c).ports.count(None) == 3
+    assert any(n.text == f"node {c} read again as its place, with 4 edges" for n in ex.notes)
+    assert ex.span[c] == pytest.approx(0.36)
+    assert not any(n.text.startswith("lost") for n in ex.notes), ex.notes
+    # Without the rule the place keeps its three edges.
+    ex, c = back(ExplorerParams(short_place_grow=False))
+    assert ex.map.node(c).degree == 3
+
+
 def test_back_from_a_dead_end_the_bearings_say_which_way_the_robot_came_in():
     """fig16 seed 18: back from the indent's dead end at the place's other point, 0.41 m
     from where the place was last read, the tracer took the indent's other departure for

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -136,3 +137,43 @@ def test_back_at_the_node_just_left_after_passing_a_weak_meet_point_is_a_bounce(
     ex._choose(meet(4.05, 0.0, [180, 300, 60], 60, 1.0))
     assert ex.notes[-1].text.startswith("back at node 2")
     assert ex.partial_m == 0.0 and ex.leaving[0] == 2
+
+
+def _back_out_of_the_indent(ex: Explorer, corridor_clr: float, span_m: float = 0.0) -> None:
+    """fig16's indent, as seed 11 without drift traced it (turned to face east): the
+    corridor's junction C at (0, 0), ``corridor_clr`` clear, left east into the indent, past
+    the weak meet point at (0.36, 0) unhomed, to the dead end at (0.86, 0.35); then back to
+    the weak point, which shows this time, 0.9 m clear, 0.36 m short of C. ``span_m``: C
+    read at two points of its place this far apart."""
+    ex._odo = Odometry(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    c = replace(meet(0.0, 0.0, [0, 90, 270], None, None), clearance_m=corridor_clr)
+    assert ex._choose(c) == 0  # east, into the indent
+    ex.span[1] = span_m
+    d = drive(ex, [(0.0, 0.0), (0.36, 0.0), (0.86, 0.35)], 0.0)
+    ex._on_boundary(BoundaryReached(0.0, 0.86, 0.35, 0.4, d))
+    drive(ex, [(0.86, 0.35), (0.36, 0.0)], d)
+    ex._choose(meet(0.36, 0.0, [180, 35, 325], 35, 0.61))
+
+
+def test_a_meet_point_unlike_the_far_end_splits_the_edge_close_to_it():
+    ex = Explorer(NOMAD200_LIMITS)
+    _back_out_of_the_indent(ex, 1.14)
+    assert "a junction its first tracing went by" in ex.notes[-1].text, ex.notes
+    weak = ex.map.node(3)
+    assert weak.kind == "meet" and weak.ports.count(None) == 1  # the other dead end's
+    assert ex.map.node(1).ports[0] in weak.ports  # C's indent departure ends at the weak point
+
+
+def test_a_meet_point_as_clear_as_the_far_end_so_close_is_not_split():
+    # As likely the far end itself, read otherwise: passed as a weak meet point.
+    ex = Explorer(NOMAD200_LIMITS)
+    _back_out_of_the_indent(ex, 0.95)
+    assert "weak meet point passed" in ex.notes[-1].text, ex.notes
+    # Nor where C's place spans 0.3 m: its points may differ by that much more.
+    ex = Explorer(NOMAD200_LIMITS)
+    _back_out_of_the_indent(ex, 1.14, span_m=0.3)
+    assert "a junction its first tracing went by" not in ex.notes[-1].text, ex.notes
+    # And 0.24 m less clear, without the rule.
+    ex = Explorer(NOMAD200_LIMITS, params=ExplorerParams(split_rest_unlike_m=0.5))
+    _back_out_of_the_indent(ex, 1.14)
+    assert "weak meet point passed" in ex.notes[-1].text, ex.notes

@@ -367,31 +367,12 @@ class Arrival(ExplorerState):
             return w, askew
         # Dead reckoning that puts the robot elsewhere than where it left for the dead end
         # vetoes an arrival read askew (a twin junction, as above).
-        pm = self._read_otherwise(
-            ev, w, q, length, edge.length_m, slack, turned=left_here is not False
-        )
+        turned = left_here is not False
+        pm = self._read_otherwise(ev, w, q, length, edge.length_m, slack, turned=turned)
         if pm is not None:
             if length is not None and not self.disturbed:
                 self.map.add_measurement(e, length)
-            self.partial_m = 0.0
-            self._misread = w
-            self._note(
-                f"node {w} confirmed by edge {e} although read with degree {ev.degree}, "
-                f"not {self.map.node(w).degree}"
-            )
-            # Each port on a departure of its own, or the reading says nothing of the place.
-            distinct = len(set(pm.index)) == len(pm.index)
-            grow = distinct and ev.degree > self.map.node(w).degree and not self._beside(w)
-            if self.p.grow_place and grow:
-                # The edge the reading has more is the place's, from its other point, which
-                # the map has not seen: fig13 seed 3's 0.29 m pair, mapped from its west
-                # point, read from the east with the east point's dead end besides; left
-                # out, the dead end was never explored and the map never whole.
-                grown = self._become_place(ev, w, dict(enumerate(pm.index)), ev.arrival_index)
-                if grown is not None:
-                    self._misread = None
-                    return grown
-            return w, pm
+            return self._as_read(ev, e, w, pm)
         short = length is not None and length < edge.length_m - tol.length_abs_m
         through = self._through_port(ev) if short else None
         if short and not self.disturbed:
@@ -409,6 +390,20 @@ class Arrival(ExplorerState):
                 split = self._junction_on_edge(ev, f, j, e, length)
             if split is not None:
                 return split
+            # The node read at its place's other point (``_short_of_place``) with an edge
+            # more or fewer: fig16 seed 13 without drift, back from the indent's dead end,
+            # homed at the weak meet point 0.36 m short of the corridor's with the place's
+            # four edges; passed through as a weak meet point, the indent's other dead end
+            # was never explored.
+            rest = edge.length_m - length
+            if 0.0 < rest < self.p.short_place_m and self.p.short_place_grow:
+                pm = self._read_otherwise(
+                    ev, w, q, length, edge.length_m, slack + rest, turned=turned
+                )
+                if pm is not None:
+                    if self.p.place_span_slack:
+                        self.span[w] = max(self.span.get(w, 0.0), rest)
+                    return self._as_read(ev, e, w, pm)
         if through is not None:
             # A weak meet point halfway (section VII-B): it did not show when the edge was
             # first traced. Not a node of the map; the edge goes on straight ahead.
@@ -454,6 +449,31 @@ class Arrival(ExplorerState):
             f"{ev.clearance_m:.2f} m after {length or 0:.2f} m"
         )
         return self._lost(ev, why)
+
+    def _as_read(
+        self, ev: MeetPointReached, e: int, w: int, pm: PortMap
+    ) -> tuple[int, int | PortMap]:
+        """Node ``w``, arrived at by edge ``e`` and read with an edge more or fewer (port map
+        ``pm``); grown into its place where the edge it has more is one the map lacks."""
+        self.partial_m = 0.0
+        self._misread = w
+        self._note(
+            f"node {w} confirmed by edge {e} although read with degree {ev.degree}, "
+            f"not {self.map.node(w).degree}"
+        )
+        # Each port on a departure of its own, or the reading says nothing of the place.
+        distinct = len(set(pm.index)) == len(pm.index)
+        grow = distinct and ev.degree > self.map.node(w).degree and not self._beside(w)
+        if self.p.grow_place and grow:
+            # The edge the reading has more is the place's, from its other point, which the
+            # map has not seen: fig13 seed 3's 0.29 m pair, mapped from its west point, read
+            # from the east with the east point's dead end besides; left out, the dead end
+            # was never explored and the map never whole.
+            grown = self._become_place(ev, w, dict(enumerate(pm.index)), ev.arrival_index)
+            if grown is not None:
+                self._misread = None
+                return grown
+        return w, pm
 
     def _match(
         self,

@@ -128,6 +128,9 @@ class ExplorerParams:
     # node there but for that much length and clearance, is the node's place read at its
     # other point (``Arrival._short_of_place``; 0: off).
     short_place_m: float = 0.4
+    # ... also read there with an edge more or fewer (``Arrival._expected``; False: only with
+    # the node's own degree).
+    short_place_grow: bool = True
     # Back from a dead end at the node read last, within ``place_hop_m`` of where: its ports by
     # the departures' absolute bearings, the way in whichever they give (``_back_by_bearings``).
     back_by_bearings: bool = True
@@ -184,6 +187,7 @@ class ExplorerParams:
     split_off_m: float = 0.6  # ... and the pass went this close by the meet point;
     split_slack_m: float = 1.0  # ... at about the place the edge's length says;
     split_rest_m: float = 0.5  # ... with this much of the pass still to go;
+    split_rest_unlike_m: float = 0.2  # ... or this much, its clearance unlike the far end's;
     split_look_m: float = 0.8  # the pass this far on shows which departure leads on,
     split_angle_rad: float = math.radians(35.0)  # ... within this angle
     split_margin_rad: float = math.radians(20.0)  # ... and clearly closer than any other
