@@ -108,9 +108,15 @@ class Arrival(ExplorerState):
     ) -> tuple[int, PortMap] | None:
         """``found`` as it is; if it is ``node``, read again ``moved`` off, the place spans
         that much: an edge to it may end at either of its points (``_expected``)."""
-        if found is not None and found[0] == node and self.p.place_span_slack:
-            self.span[node] = max(self.span.get(node, 0.0), moved)
+        if found is not None and found[0] == node:
+            self._widen_span(node, moved)
         return found
+
+    def _widen_span(self, node: int, apart: float) -> None:
+        """``node``'s place was read at two points ``apart`` metres apart (with
+        ``place_span_slack``; ``_expected`` allows for it)."""
+        if self.p.place_span_slack:
+            self.span[node] = max(self.span.get(node, 0.0), apart)
 
     def _beside(self, node: int) -> bool:
         """Whether ``node`` has a mapped edge to another meet point no shorter than a place
@@ -291,8 +297,7 @@ class Arrival(ExplorerState):
         k = self._match(ev, seen, a, w, q, length, length + rest, slack + rest, near + rest)
         if k is None:
             return None
-        if self.p.place_span_slack:
-            self.span[w] = max(self.span.get(w, 0.0), rest)
+        self._widen_span(w, rest)
         self.partial_m = 0.0
         self._note(f"node {w} read {rest:.2f} m short of its edge's end: its place's other point")
         return k
@@ -401,8 +406,7 @@ class Arrival(ExplorerState):
                     ev, w, q, length, edge.length_m, slack + rest, turned=turned
                 )
                 if pm is not None:
-                    if self.p.place_span_slack:
-                        self.span[w] = max(self.span.get(w, 0.0), rest)
+                    self._widen_span(w, rest)
                     return self._as_read(ev, e, w, pm)
         if through is not None:
             # A weak meet point halfway (section VII-B): it did not show when the edge was

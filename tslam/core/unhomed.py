@@ -334,11 +334,11 @@ class Unhomed(ExplorerState):
     def _unlike_far_end(self, ev: MeetPointReached, f: int, e: int) -> bool:
         """Whether the meet point ``ev`` cannot be edge ``e``'s far end from ``f`` read
         otherwise: the far end is a meet point whose clearance differs from the one read by
-        more than the tolerance (and than the far end's place spans, if read at two points:
-        ``ExplorerParams.place_span_clearance``). Back from fig16's indent the weak meet
-        point showed 0.4 m from the dead end, 0.45 m short of the corridor's junction
-        (clearance 0.9 m against 1.14 m); passed through as no node, the indent's other dead
-        end was never explored (seed 11 without drift)."""
+        more than the tolerance plus the far end's place span (``span``, if it was read
+        at two points). Back from fig16's indent the weak meet point showed 0.4 m from the
+        dead end, 0.45 m short of the corridor's junction (clearance 0.9 m against 1.14 m);
+        passed through as no node, the indent's other dead end was never explored (seed 11
+        without drift)."""
         edge = self.map.edge(e)
         w = edge.v if edge.u == f else edge.u
         far = self.map.node(w)
