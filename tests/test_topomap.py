@@ -479,6 +479,20 @@ def test_shortest_path_picks_the_shorter_of_two_parallel_edges():
         m.shortest_path(a, c)
 
 
+def test_an_edge_made_longer_for_planning_is_gone_round():
+    m, ids = diamond()
+    # Edge 3 (S-B, 1 m) counted 20 m longer: through A (4 m) beats through B (22.5 m).
+    path = m.shortest_path(ids["S"], ids["D"], {3: 20.0})
+    assert [s.edge for s in path] == [1, 2]
+    assert m.distances(ids["S"], {3: 20.0})[ids["D"]] == pytest.approx(4.0)
+    assert m.distances(ids["S"])[ids["D"]] == pytest.approx(2.5)
+    # Of two parallel edges, the shorter made longer is the other's to take.
+    a, b = ids["S"], ids["B"]
+    long = m.connect(a, 2, b, 2, 3.0)
+    assert m.shortest_path(a, b, {3: 20.0}) == [Step(a, 2, long, b, 2)]
+    assert m.shortest_path(a, b) == [Step(a, 1, 3, b, 0)]
+
+
 def test_nearest_unexplored():
     m = TopoMap()
     s = m.add_boundary(0.4, pose=(0, 0))

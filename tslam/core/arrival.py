@@ -32,12 +32,21 @@ class Arrival(ExplorerState):
         a = ev.arrival_index
         length = self._edge_length(ev.edge_length_m)
         resuming, self._resuming = self._resuming, False
+        short, self._short_from = self._short_from, None
         if self.leaving is None or self.detoured or a is None:
             return self._lost(ev, "off the graph", resuming)
+        back = self._back_from_short_end(ev, short)
+        if back is not None:
+            return back
         f, j = self.leaving
         bounced = self._bounced(ev)
         if bounced is not None:
             return bounced
+        if short is not None:
+            # Not the edge's far end (the robot turned back short of it), and not where it
+            # left: nothing on the edge says where it is.
+            self._failed(f, j)
+            return self._lost(ev, f"not back where node {f} was left for the dead end")
         e = self.map.node(f).ports[j]
         seen = self._seen(ev, a, f)
         if e is not None:
@@ -452,6 +461,7 @@ class Arrival(ExplorerState):
             f"edge {e} ({edge.length_m:.2f} m), found degree {ev.degree}, clearance "
             f"{ev.clearance_m:.2f} m after {length or 0:.2f} m"
         )
+        self._failed(f, j)
         return self._lost(ev, why)
 
     def _as_read(

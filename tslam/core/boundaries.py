@@ -15,6 +15,10 @@ class Boundaries(ExplorerState):
 
     def _on_boundary(self, ev: BoundaryReached) -> None:
         length = self._edge_length(ev.edge_length_m)
+        if self._short_from is not None:
+            # A dead end on the way back from one short along a mapped edge: lost after all.
+            self._short_from = None
+            self.detoured = True
         if self.leaving is None or self.detoured:
             self._abandon_hypotheses(lost=True)
             b = self._add_boundary(ev)
@@ -38,6 +42,9 @@ class Boundaries(ExplorerState):
                 ev, length, True
             ):
                 return
+            if self._short_end(ev, f, j, e, length):
+                return
+            self._failed(f, j)
             self._abandon_hypotheses(lost=True)
             self.plan = []
             b = self._add_boundary(ev)

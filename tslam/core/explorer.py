@@ -58,6 +58,7 @@ from tslam.core.place_pair import PlacePair
 from tslam.core.portmap import PortMap
 from tslam.core.predicted_place import PredictedPlace
 from tslam.core.resolving import Resolving
+from tslam.core.short_ends import ShortEnds
 from tslam.core.shut_in import ShutIn
 from tslam.core.topomap import MapError, Step
 from tslam.core.tracer import Behaviour, BoundaryReached, Event, MeetPointReached
@@ -86,6 +87,7 @@ class Explorer(
     Resolving,
     HeadingBounds,
     ShutIn,
+    ShortEnds,
 ):
     """``step`` once per control cycle, like the tracer; read ``map``, ``mode``, ``notes``."""
 
@@ -334,7 +336,9 @@ class Explorer(
         """Start on a new edge: whatever the last one left behind does not carry over."""
         # A pass with a brief excursion is still where the robot went, to a few decimetres.
         done = self._edge_left()
-        if done is not None and self.leaving and not self.detoured and self._odo is not None:
+        no_pass, self._no_pass = self._no_pass, False
+        recorded = self.leaving and not (self.detoured or no_pass)
+        if done is not None and recorded and self._odo is not None:
             self.paths.finish(done, self.leaving[0], self._odo.distance_m)
         else:
             self.paths.restart()
@@ -381,7 +385,7 @@ class Explorer(
                 return None
             if not (self.plan and self.plan[0].node == node):
                 try:
-                    self.plan = self.map.shortest_path(node, self.goal)
+                    self.plan = self._path(node, self.goal)
                 except MapError:  # a merge or a removal cut the way
                     self.plan = []
             if self.plan:
@@ -412,7 +416,7 @@ class Explorer(
         near = sorted((dist[n], n) for n in self.hyps.fragment if n != node and n in dist)
         for _, n in near:
             if self._separating_port(n) is not None:
-                return self.map.shortest_path(node, n)
+                return self._path(node, n)
         return []
     def _verify_path(self, node: int) -> list[Step]:
         """Once nothing is left to explore: the graph path along the nearest edge between
@@ -441,7 +445,7 @@ class Explorer(
         port = edge.port_u if edge.u == start else edge.port_v
         far, far_port = edge.other_end(start, port)
         self._note(f"edge {e} traced once: back along it from node {start}")
-        path = self.map.shortest_path(node, start) if start != node else []
+        path = self._path(node, start) if start != node else []
         return [*path, Step(start, port, e, far, far_port)]
     def _frontier_path(self, node: int) -> list[Step]:
         """The graph path to the nearest node with a departure left to explore."""
@@ -453,4 +457,4 @@ class Explorer(
         if not reachable:
             return []
         _, target = min(reachable)
-        return self.map.shortest_path(node, target)
+        return self._path(node, target)

@@ -101,6 +101,15 @@ class ExplorerParams:
     # ... and at least this far: the other point of a close pair, read with the same edges.
     bounce_place_m: float = 0.45
     bounce_retries: int = 1
+    # A dead end short along a mapped edge to a junction is that edge not held: back to the
+    # junction just left, recognised there by dead reckoning, and the departure tried again
+    # (``short_ends.py``; False: lost there, as before stop 66).
+    short_end_back: bool = True
+    # Planning, an edge the robot set out along and was lost at the end of counts this much
+    # longer for each time (0: by length alone). fig14 seed 3 without drift set out five
+    # times along one lab edge whose junction it misread, lost each time, and copies of the
+    # lab piled up until the run's time was out.
+    failed_edge_m: float = 20.0
     # A dead end reached again by another departure is the one mapped if dead reckoning
     # puts it this close to where the robot last was there, whichever way it went out
     # (two corners of one junction are further apart: each is some 0.45 m from both its

@@ -13,8 +13,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import NamedTuple
 
-import networkx as nx
-
 from hal.interfaces import DriveLimits
 from hal.types import Odometry
 from tslam.core.edgepaths import EdgePaths
@@ -115,6 +113,7 @@ class ExplorerState:
         self.rechecked: set[tuple[int, int]] = set()
         self.notes: list[Note] = []
         self.bounces: dict[tuple[int, int], int] = {}
+        self.failed: dict[int, int] = {}  # edge -> times set out along and lost (``_avoid``)
         self.went_along_another: set[tuple[int, int]] = set()  # ... not held so, once or more
         # Meet node -> how far apart two of its place's points were read (``_spans``).
         self.span: dict[int, float] = {}
@@ -130,6 +129,10 @@ class ExplorerState:
         self.blind: set[int] = set()
         self._arrive_after: tuple[float, tuple[float, ...]] | None = None
         self._straight_m = 0.0  # go on straight this far along the departure (_across_place)
+        # (node, port, length out) of a dead end short along a mapped edge, the robot on its
+        # way back to the node (``short_ends.py``); and the next departure records no pass.
+        self._short_from: tuple[int, int, float] | None = None
+        self._no_pass = False
         self._now = 0.0
         self._odo: Odometry | None = None
         self.paths = EdgePaths()
@@ -191,10 +194,28 @@ class ExplorerState:
         return abs(a - b) <= tol.clearance_m + self.p.place_hop_m / 2
 
     def _distances(self, node: int) -> dict[int, float]:
-        """Graph distance from ``node`` to every node it reaches, by the shortest edges."""
-        return nx.single_source_dijkstra_path_length(
-            self.map.graph, node, weight=lambda u, v, d: min(x["length_m"] for x in d.values())
-        )
+        """Graph distance from ``node`` to every node it reaches, by the shortest edges, an
+        edge the robot could not follow that much longer (``_avoid``)."""
+        return self.map.distances(node, self._avoid())
+
+    def _path(self, src: int, dst: int) -> list[Step]:
+        """``TopoMap.shortest_path``, an edge the robot could not follow that much longer."""
+        return self.map.shortest_path(src, dst, self._avoid())
+
+    def _avoid(self) -> dict[int, float]:
+        """Edge id -> metres added to its length for planning: ``failed_edge_m`` for each
+        time the robot set out along it and was lost at its end."""
+        m = self.p.failed_edge_m
+        return {e: n * m for e, n in self.failed.items() if m > 0.0 and self.map.has_edge(e)}
+
+    def _failed(self, node: int, port: int) -> None:
+        """The robot set out from ``node`` by ``port`` along a mapped edge and did not arrive
+        where the map said: one more failure of that edge."""
+        if not self.map.has_node(node) or port >= len(self.map.node(node).ports):
+            return
+        e = self.map.node(node).ports[port]
+        if e is not None:
+            self.failed[e] = self.failed.get(e, 0) + 1
 
     def _given_up(self) -> list[tuple[int, int]]:
         """Unexplored departures given up: frozen after ``bounce_retries`` tries not held."""

@@ -91,5 +91,5 @@ class ShutIn(ExplorerState):
         _, e, n, q = best
         w, p = self.map.edge(e).other_end(n, q)
         self.rechecked.add((n, q))
-        path = self.map.shortest_path(node, w) if w != node else []
+        path = self._path(node, w) if w != node else []
         return n, e, [*path, Step(w, p, e, n, q)]

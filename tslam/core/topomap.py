@@ -691,17 +691,25 @@ class TopoMap:
         of b); empty means certainly different places. See ``tslam.core.signature``."""
         return rotations(self.signature(a), self.signature(b), clearance_tol_m, angle_tol_rad)
 
-    def shortest_path(self, src: int, dst: int) -> list[Step]:
+    def shortest_path(
+        self, src: int, dst: int, extra_m: Mapping[int, float] | None = None
+    ) -> list[Step]:
         """The graph path by median edge length: what the robot retraces to get somewhere
-        (section V-B), as departures to take, never as x, y waypoints."""
+        (section V-B), as departures to take, never as x, y waypoints. ``extra_m``: edge id
+        -> metres added to that edge's length (an edge the robot could not follow)."""
         self.node(src), self.node(dst)
         if src == dst:
             return []
         try:
-            nodes = nx.dijkstra_path(self._graph, src, dst, weight=_weight)
+            nodes = nx.dijkstra_path(self._graph, src, dst, weight=_weighted(extra_m))
         except nx.NetworkXNoPath:
             raise MapError(f"no path from node {src} to node {dst}") from None
-        return self._steps(nodes)
+        return self._steps(nodes, extra_m)
+
+    def distances(self, src: int, extra_m: Mapping[int, float] | None = None) -> dict[int, float]:
+        """Graph distance from ``src`` to every node it reaches (``shortest_path``'s measure)."""
+        self.node(src)
+        return nx.single_source_dijkstra_path_length(self._graph, src, weight=_weighted(extra_m))
 
     def nearest_unexplored(self, src: int) -> Frontier | None:
         """The closest node with an unexplored departure (section III-D), or None when
@@ -714,10 +722,12 @@ class TopoMap:
         d, n = best
         return Frontier(n, self._nodes[n].ports.index(None), self._steps(paths[n]), d)
 
-    def _steps(self, nodes: list[int]) -> list[Step]:
-        out = []
+    def _steps(self, nodes: list[int], extra_m: Mapping[int, float] | None = None) -> list[Step]:
+        out, extra = [], extra_m or {}
         for a, b in itertools.pairwise(nodes):
-            e = min(self._graph[a][b], key=lambda k: (self._edges[k].length_m, k))
+            e = min(
+                self._graph[a][b], key=lambda k: (self._edges[k].length_m + extra.get(k, 0.0), k)
+            )
             edge = self._edges[e]
             pa, pb = (edge.port_u, edge.port_v) if edge.u == a else (edge.port_v, edge.port_u)
             out.append(Step(a, pa, e, b, pb))
@@ -858,6 +868,13 @@ class TopoMap:
 
 def _weight(u: int, v: int, d: Mapping[int, Mapping[str, float]]) -> float:
     return min(attr["length_m"] for attr in d.values())
+
+
+def _weighted(extra_m: Mapping[int, float] | None) -> Any:
+    """Dijkstra's weight: ``_weight``, each edge id in ``extra_m`` that much longer."""
+    if not extra_m:
+        return _weight
+    return lambda u, v, d: min(a["length_m"] + extra_m.get(k, 0.0) for k, a in d.items())
 
 
 # -- reading a serialised map ---------------------------------------------------------------
