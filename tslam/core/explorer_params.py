@@ -296,6 +296,9 @@ class ExplorerParams:
     # not place in turn (a lap onto an earlier lap). The proven one is merged and such
     # rivals stay open, renamed (``Resolving._compatible``).
     merge_compatible: bool = True
+    # Rivals with no move here to test them are kept open, not recorded as an ambiguity,
+    # while one of them leads the rest by two confirmations (``Resolving._clear_lead``).
+    lead_waits: bool = True
     # A hypothesis's crowd counts every old node that looks like the new one, even those whose
     # departure the robot came by is already explored (``Explorer._crowd``).
     crowd_all_ports: bool = True

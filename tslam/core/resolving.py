@@ -23,7 +23,14 @@ from tslam.core.zipmerge import implies, merge_mapping
 # the way is tested by a few; fig15's aisles are fitted by dozens at once, none of which
 # implies the rest, and trying them all at every arrival took seconds per arrival.
 FOLD_MAX = 4
-LOOP_MARGIN = 2  # confirmations a loop or a placement needs over the other kind
+# Confirmations one hypothesis needs over its rivals to go ahead of them: a loop over the
+# placements or a placement over the loops, and a lead with no move here to test the rest.
+LOOP_MARGIN = 2
+
+
+def support(h: Hypothesis) -> float:
+    """A hypothesis's evidence: its confirmations, each dead end half of one."""
+    return h.confirmed + 0.5 * h.dead_ends
 
 
 class Resolving(MergeGrow):
@@ -143,7 +150,8 @@ class Resolving(MergeGrow):
             if separating_port(self.map, tests_it, node) is not None:
                 return {}
             return self._merge(tested[0])
-        if len(tested) > 1 and 0 < self.p.fragment_max <= len(self.hyps.fragment):
+        too_big = 0 < self.p.fragment_max <= len(self.hyps.fragment)
+        if len(tested) > 1 and too_big:
             self._note(
                 f"node {node}: {len(self.hyps.fragment)} nodes mapped since the hypotheses "
                 f"began and no move has told {len(tested)} placements apart"
@@ -154,8 +162,20 @@ class Resolving(MergeGrow):
             # Not proven, and nothing to test from here: keep it open for a later edge to
             # test; it ages out if none does. Never merge on a guess.
             return {}
+        if len(tested) > 1 and self.p.lead_waits and not too_big and self._clear_lead(tested):
+            return {}
         self._abandon_hypotheses()
         return {}
+
+    def _clear_lead(self, tested: list[Hypothesis]) -> bool:
+        """Whether one hypothesis leads every rival by ``LOOP_MARGIN`` confirmations. Then
+        no ambiguity is recorded for want of a move here: the rivals age out unless a later
+        edge tests them, as a lone unproven hypothesis would."""
+        ranked = sorted(tested, key=support, reverse=True)
+        lead = ranked[0]
+        return lead.confirmed >= 1 and all(
+            support(lead) >= support(r) + LOOP_MARGIN for r in ranked[1:]
+        )
 
     def _loops_apart(
         self, tested: list[Hypothesis], evidence: int
@@ -186,8 +206,7 @@ class Resolving(MergeGrow):
         def ahead(lead: list[Hypothesis], rest: list[Hypothesis]) -> bool:
             if len(lead) != 1 or not lead[0].proven(evidence, weigh):
                 return False
-            e = lead[0].confirmed + 0.5 * lead[0].dead_ends
-            return all(e >= r.confirmed + 0.5 * r.dead_ends + LOOP_MARGIN for r in rest)
+            return all(support(lead[0]) >= support(r) + LOOP_MARGIN for r in rest)
 
         if ahead(others, loops):
             return others, [], False
@@ -206,10 +225,6 @@ class Resolving(MergeGrow):
         mapped places. Both are true at once, yet as rivals they left 30 nodes unmerged, and
         each lap after brought one look-alike more."""
         weigh = self.p.weigh_crowd
-
-        def support(h: Hypothesis) -> float:
-            return h.confirmed + 0.5 * h.dead_ends
-
         ranked = sorted(tested, key=support, reverse=True)
         lead = ranked[0]
         if support(ranked[1]) >= support(lead) or not lead.proven(self.p.merge_evidence, weigh):
